@@ -1,0 +1,1 @@
+"""Command-line analyses: one module per ``[analyses.<name>]`` table (``OPTIONS``, ``run``)."""

@@ -1,0 +1,1 @@
+"""Model builders for scene files: one module per ``[model] kind`` (imported lazily)."""

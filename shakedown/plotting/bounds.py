@@ -1,0 +1,157 @@
+"""Pictures of the constraint hyperplanes and the safe shakedown region (seed 002 Figs. 2-4)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..bounds import ShakedownBounds, extreme_constraints, safe_region
+from ..errors import InputError
+
+_COLORS = ("tab:blue", "tab:orange", "tab:green", "tab:red")
+_ROMAN = ("I", "II", "III", "IV")
+
+
+def _ax(ax):
+    import matplotlib.pyplot as plt
+
+    if ax is None:
+        _, ax = plt.subplots(figsize=(5.5, 5))
+    return ax
+
+
+def _line_segment(g, b, xlim, ylim):
+    """Points of the line g . v = b clipped to the box (for drawing)."""
+    pts = []
+    (x0, x1), (y0, y1) = xlim, ylim
+    if abs(g[1]) > 1e-14:
+        for x in (x0, x1):
+            pts.append((x, (b - g[0] * x) / g[1]))
+    if abs(g[0]) > 1e-14:
+        for y in (y0, y1):
+            pts.append(((b - g[1] * y) / g[0], y))
+    pts = [p for p in pts if x0 - 1e-9 <= p[0] <= x1 + 1e-9 and y0 - 1e-9 <= p[1] <= y1 + 1e-9]
+    return np.array(pts[:2]) if len(pts) >= 2 else None
+
+
+def plot_constraints_2d(system, load, lam: float, *, t=None, ax=None, limits=None,
+                        show_region: bool = True, show_extremes: bool = True, state=None):
+    """The four constraint lines of a two-node system in ``v``-space (seed 002 Figs. 2-4).
+
+    Constraint ``I``/``II`` belong to node 1 (slip backward / forward), ``III``/``IV`` to node 2
+    (the seed's numbering; the package's labels are ``I_0, I_1, II_0, II_1``).  Extreme
+    positions are dashed, the safe shakedown region ``H(lam)`` is shaded, and if ``t`` is given
+    the instantaneous lines at time ``t`` (cycles) are drawn solid with the excluded side hatched.
+
+    Parameters
+    ----------
+    system, load : DiscreteSystem (2 nodes), LoadCycle
+    lam : float
+        Load factor.
+    t : float, optional
+        Time (cycles) of the instantaneous lines.
+    limits : (xmin, xmax, ymin, ymax), optional
+        Plot window in slip units; by default a box around the region.
+    state : array_like (2,), optional
+        A slip state to mark.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
+    if system.n_nodes != 2:
+        raise InputError(f"plot_constraints_2d needs a two-node system; got {system.n_nodes} nodes")
+    ax = _ax(ax)
+    region = safe_region(system, load, lam)
+    G, b = region.normals, region.offsets
+    verts = region.vertices_2d()
+    if limits is None:
+        if len(verts):
+            lo, hi = verts.min(axis=0), verts.max(axis=0)
+        else:
+            # centre on the intersection of the I-constraints
+            centre = np.linalg.lstsq(G[[0, 1]], b[[0, 1]], rcond=None)[0]
+            lo = hi = centre
+        span = max(float(np.max(hi - lo)), 1e-12) if len(verts) else 1.0
+        if len(verts) < 3:
+            span = max(span, np.abs(b).max() / np.abs(G).max())
+        pad = 0.6 * span
+        limits = (lo[0] - pad, hi[0] + pad, lo[1] - pad, hi[1] + pad)
+    xlim, ylim = limits[:2], limits[2:]
+    # order rows as the seed: I (node 1 back), II (node 1 fwd), III (node 2 back), IV (node 2 fwd)
+    order = (0, 2, 1, 3)
+    for r, k in enumerate(order):
+        seg = _line_segment(G[k], b[k], xlim, ylim) if show_extremes else None
+        if seg is not None:
+            ax.plot(seg[:, 0], seg[:, 1], "--", color=_COLORS[r], lw=1.2,
+                    label=f"{_ROMAN[r]}$^E$ ({region.labels[k]})")
+        if t is not None:
+            bt = extreme_constraints(system, load).instantaneous(system, load, t, lam)[k]
+            seg_t = _line_segment(G[k], bt, xlim, ylim)
+            if seg_t is not None:
+                ax.plot(seg_t[:, 0], seg_t[:, 1], "-", color=_COLORS[r], lw=1.8)
+                # hatch the excluded side: a short arrow along the normal
+                mid = seg_t.mean(axis=0)
+                nrm = G[k] / np.linalg.norm(G[k]) * 0.05 * (xlim[1] - xlim[0])
+                ax.annotate("", xy=mid + nrm, xytext=mid,
+                            arrowprops={"arrowstyle": "->", "color": _COLORS[r]})
+    if show_region and len(verts) >= 3:
+        ax.fill(verts[:, 0], verts[:, 1], color="0.85", zorder=0, label=r"safe region $\mathcal{H}$")
+    elif show_region and len(verts):
+        ax.plot(verts[:, 0], verts[:, 1], "k.", ms=8, label=r"$\mathcal{H}$ (degenerate)")
+    if state is not None:
+        ax.plot(*np.asarray(state, float), "ko", ms=5, label="state")
+    ax.set_xlim(*xlim)
+    ax.set_ylim(*ylim)
+    ax.set_xlabel("$v_1$ (slip of node 1)")
+    ax.set_ylabel("$v_2$ (slip of node 2)")
+    ax.set_title(rf"extreme constraints at $\lambda$ = {lam:.4g}")
+    ax.legend(fontsize=8, loc="best")
+    ax.set_aspect("equal", adjustable="box")
+    return ax
+
+
+def region_curve(system, load, lams):
+    """Safe-region area (two nodes only, else nan) for each load factor in ``lams``."""
+    lams = np.asarray(lams, float)
+    area = np.full(lams.shape, np.nan)
+    if system.n_nodes == 2:
+        for i, lam in enumerate(lams):
+            area[i] = safe_region(system, load, lam).area()
+    return area
+
+
+def plot_region_vs_lam(bounds: ShakedownBounds, *, system=None, load=None, lams=None, ax=None):
+    """Active-constraint count (and, for two nodes, the safe-region area) against ``lam``.
+
+    The count uses the activity intervals of ``bounds``; ``lam1`` and ``lam2`` are marked.
+    Pass ``system`` and ``load`` to add the area curve (two-node systems).
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes of the count (the area, if drawn, is on ``ax.right_ax``).
+    """
+    ax = _ax(ax)
+    top = bounds.lam2 if np.isfinite(bounds.lam2) else (
+        bounds.lam1 if np.isfinite(bounds.lam1) and bounds.lam1 > 0 else 1.0)
+    if lams is None:
+        lams = np.linspace(0.0, 1.15 * top, 240)
+    lams = np.asarray(lams, float)
+    count = np.array([bounds.active_at(x).sum() if (not np.isfinite(bounds.lam2) or
+                      x <= bounds.lam2) else 0 for x in lams])
+    ax.step(lams, count, where="post", color="tab:blue", label="active extreme constraints")
+    ax.set_xlabel(r"load factor $\lambda$")
+    ax.set_ylabel("active constraints", color="tab:blue")
+    ax.set_ylim(-0.2, 2 * bounds.n_nodes + 0.5)
+    for val, name, style in ((bounds.lam1, r"$\lambda_1$", ":"), (bounds.lam2, r"$\lambda_2$", "--")):
+        if np.isfinite(val):
+            ax.axvline(val, color="k", ls=style, lw=1)
+            ax.text(val, 2 * bounds.n_nodes + 0.2, name, ha="center", va="bottom")
+    if system is not None and load is not None and system.n_nodes == 2:
+        ax2 = ax.twinx()
+        ax2.plot(lams, region_curve(system, load, lams), color="tab:orange", label="area of H")
+        ax2.set_ylabel(r"area of $\mathcal{H}(\lambda)$", color="tab:orange")
+        ax2.set_ylim(bottom=0)
+        ax.right_ax = ax2
+    ax.set_title("safe shakedown region against the load factor")
+    return ax
