@@ -1,0 +1,198 @@
+"""Condensation onto the slip nodes: the pencil ``K0 + mu K1`` (MODEL.md s.5).
+
+A perturbation ``(v', w')`` with reactions ``(q', p')`` keeps stick nodes fixed
+(``v' = w' = 0``), keeps slip nodes closed (``w' = 0``), leaves free nodes unloaded
+(``q' = p' = 0``; frictionless closed nodes: ``q' = 0``, ``w' = 0``).  Eliminating the unloaded
+DOFs ``e`` by a Schur complement (``c``: the slip nodes' tangential and normal DOFs,
+``s``: their tangential DOFs),
+
+    r_c = S v'_s,   S = K_cs - K_ce K_ee^-1 K_es,
+
+gives on the slip nodes ``q'_s = S_tt v'_s``, ``p'_s = S_nt v'_s``.  With ``X = diag(chi)``,
+``x = X v'_s`` and ``y = X q'_s + mu F p'_s`` (``F = diag(friction profile)``, ones for a
+uniform friction ``mu``):
+
+    y = (K0 + mu K1) x,   K0 = X S_tt X  (SPD),   K1 = F S_nt X.
+
+Sign check (MODEL.md s.1): a slip node with ``chi = +1`` has ``q = -f p``; it stays on the cone
+while slipping iff ``-(q + q') = f (p + p')``, i.e. ``y = chi q' + f p' = 0``, and it may
+unload into stick iff ``y >= 0``.  With mass, ``K`` is replaced by the dynamic stiffness
+``K(s)``, ``s = lam^2`` (growth ``e^(lam t)``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+
+from ..errors import InputError, ShapeError
+from .classify import FREE, FRICTIONLESS, SLIP, NodePartition
+
+
+@dataclass(frozen=True, eq=False)
+class SlipPencil:
+    """The matrices of MCEIP ``y = (K0 + mu K1) x`` on the slip nodes.
+
+    Attributes
+    ----------
+    K0 : ndarray, shape (n, n)
+        ``X S_tt X``, symmetric positive definite [force / length].
+    K1 : ndarray, shape (n, n)
+        ``F S_nt X`` [force / length], not symmetric.
+    nodes : ndarray of int, shape (n,)
+        Global indices of the slip nodes.
+    chi : ndarray, shape (n,)
+        Their slip directions.
+    profile : ndarray, shape (n,)
+        Friction profile ``F`` (the friction of node ``j`` is ``mu * profile[j]``).
+    lam : float
+        Growth rate at which the (dynamic) stiffness was taken (0: quasi-static).
+    """
+
+    K0: np.ndarray
+    K1: np.ndarray
+    nodes: np.ndarray
+    chi: np.ndarray
+    profile: np.ndarray
+    lam: float = 0.0
+
+    @property
+    def size(self) -> int:
+        return self.K0.shape[0]
+
+    def matrix(self, mu: float) -> np.ndarray:
+        """``K0 + mu K1``."""
+        return self.K0 + mu * self.K1
+
+    def restricted(self, support) -> SlipPencil:
+        """The pencil on a subset of the slip nodes (the others held stuck)."""
+        J = np.asarray(support, dtype=int)
+        ix = np.ix_(J, J)
+        return SlipPencil(
+            self.K0[ix], self.K1[ix], self.nodes[J], self.chi[J], self.profile[J], self.lam
+        )
+
+    @property
+    def scale(self) -> float:
+        """``max(|K0|, |K1|)`` (used to make residuals relative)."""
+        return float(max(np.abs(self.K0).max(initial=0), np.abs(self.K1).max(initial=0), 1e-300))
+
+
+def as_dynamic_stiffness(source, mass=None):
+    """A callable ``s -> K(s)`` (shape (2N, 2N)) from one of several sources.
+
+    Parameters
+    ----------
+    source
+        A :class:`~shakedown.DiscreteSystem` or an array ``K`` (shape (2N, 2N), order:
+        tangential DOFs of all nodes, then normal DOFs); a callable ``s -> K(s)``; or an object
+        with a ``dynamic_stiffness(s)`` method (a condensed FE model: exact condensation of
+        ``K + s M``).
+    mass : array_like, shape (2N, 2N), optional
+        Mass on the contact DOFs for array / system sources: ``K(s) = K + s M`` (a Guyan-type
+        lumping onto the contact nodes; documented approximation).  Without it, only ``s = 0``
+        is allowed.
+    """
+    if hasattr(source, "dynamic_stiffness"):
+        return source.dynamic_stiffness
+    if callable(source) and not isinstance(source, np.ndarray):
+        return source
+    K = np.asarray(source.K if hasattr(source, "K") else source, dtype=float)
+    if K.ndim != 2 or K.shape[0] != K.shape[1] or K.shape[0] % 2:
+        raise ShapeError(f"K must have shape (2N, 2N); got {K.shape}")
+    if mass is None:
+
+        def static_only(s):
+            if s != 0:
+                raise InputError(
+                    f"a growth rate lam > 0 (s = lam^2 = {s:g}) needs a mass: pass mass= "
+                    "(2N, 2N) or a condensed FE model with dynamic_stiffness(s)"
+                )
+            return K
+
+        return static_only
+    M = np.asarray(mass, dtype=float)
+    if M.shape != K.shape:
+        raise ShapeError(f"mass must have shape {K.shape} like K; got {M.shape}")
+    return lambda s: K + s * M
+
+
+def slip_pencil(
+    stiffness,
+    partition: NodePartition,
+    *,
+    friction_profile=None,
+    lam: float = 0.0,
+    mass=None,
+) -> SlipPencil:
+    """Condense ``K`` (or ``K(lam^2)``) onto the slip nodes of ``partition``.
+
+    Parameters
+    ----------
+    stiffness
+        Anything accepted by :func:`as_dynamic_stiffness` (DiscreteSystem, array (2N, 2N),
+        callable, condensed FE model).
+    partition : NodePartition
+        Node states and slip directions; ``partition.n_nodes`` must be ``N``.
+    friction_profile : array_like, shape (N,), optional
+        Relative friction per node (default ones: uniform friction ``mu``).
+    lam : float
+        Growth rate (``>= 0``); ``K(s)`` is evaluated at ``s = lam^2``.
+    mass : array_like, optional
+        See :func:`as_dynamic_stiffness`.
+
+    Returns
+    -------
+    SlipPencil
+    """
+    if not isinstance(partition, NodePartition):
+        raise InputError(
+            f"partition must be a NodePartition; got {type(partition).__name__} "
+            "(use classify_nodes or NodePartition.from_states)"
+        )
+    if not (np.isfinite(lam) and lam >= 0):
+        raise InputError(f"lam must be finite and >= 0; got {lam}")
+    K = np.asarray(as_dynamic_stiffness(stiffness, mass)(float(lam) ** 2), dtype=float)
+    n = partition.n_nodes
+    if K.shape != (2 * n, 2 * n):
+        raise ShapeError(
+            f"K must have shape (2N, 2N) = ({2 * n}, {2 * n}) for a partition of {n} nodes; "
+            f"got {K.shape}"
+        )
+    states = partition.states
+    s = np.flatnonzero(states == SLIP)
+    if s.size == 0:
+        raise InputError("the partition has no slip node: nothing to condense (no MCEIP)")
+    e = np.concatenate(
+        [np.flatnonzero(states == FREE), np.flatnonzero(states == FREE) + n,
+         np.flatnonzero(states == FRICTIONLESS)]
+    )
+    rows = np.concatenate([s, s + n])
+    Kcs = K[np.ix_(rows, s)]
+    if e.size:
+        Kee = K[np.ix_(e, e)]
+        try:
+            cho = sla.cho_factor(Kee)
+        except np.linalg.LinAlgError:
+            raise InputError(
+                "the free nodes' block of K is not positive definite: the partition leaves a "
+                "rigid-body motion (e.g. every node free); check the node states"
+            ) from None
+        Kcs = Kcs - K[np.ix_(rows, e)] @ sla.cho_solve(cho, K[np.ix_(e, s)])
+    m = s.size
+    S_tt = 0.5 * (Kcs[:m] + Kcs[:m].T)
+    S_nt = Kcs[m:]
+    chi = partition.chi[s]
+    if friction_profile is None:
+        prof = np.ones(m)
+    else:
+        prof = np.broadcast_to(np.asarray(friction_profile, dtype=float), (n,))[s]
+        if np.any(prof < 0) or not np.all(np.isfinite(prof)):
+            raise InputError("friction_profile must be finite and >= 0")
+    K0 = chi[:, None] * S_tt * chi[None, :]
+    K1 = prof[:, None] * S_nt * chi[None, :]
+    for a in (K0, K1):
+        a.setflags(write=False)
+    return SlipPencil(K0, K1, s, chi, prof, float(lam))
