@@ -34,6 +34,7 @@ _LAZY = {
     "UniquenessStudy": "steady",
     "solve_step": "complementarity",
     "stability": None,
+    "fe": None,
     "plotting": None,
     "scenes": None,
     "gallery": None,
