@@ -258,12 +258,21 @@ class AnalysisContext:
         self.progress.log(message)
 
 
-def build(scene: Scene):
-    """Build ``(system, load, extra)`` for a scene with its model kind's builder."""
+def build(scene: Scene, output=None):
+    """Build ``(system, load, extra)`` for a scene with its model kind's builder.
+
+    ``output`` (an :class:`~shakedown.output.OutputFolder`) is where builders that cache
+    expensive products (FE condensation) may keep them; nothing is written elsewhere.
+    """
+    import inspect
+
     builder = builder_module(scene.model["kind"])
     model = {k: v for k, v in scene.model.items() if k != "kind"}
+    kwargs = {}
+    if output is not None and "cache_root" in inspect.signature(builder.build).parameters:
+        kwargs["cache_root"] = output.path
     try:
-        return builder.build(model, scene.load, scene.directory)
+        return builder.build(model, scene.load, scene.directory, **kwargs)
     except SceneError as exc:
         msg = str(exc)
         if scene.label not in msg:
@@ -278,7 +287,7 @@ def run_scene(scene: Scene, output, progress, only: list[str] | None = None) -> 
     names = list(only) if only else list(scene.analyses) or ["bounds"]
     for name in names:
         analysis_module(name, scene.label)
-    system, load, extra = build(scene)
+    system, load, extra = build(scene, output)
     ctx = AnalysisContext(system, load, extra, output, progress, scene.path, scene)
     summaries = {}
     for name in names:

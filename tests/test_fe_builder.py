@@ -38,12 +38,17 @@ def test_builder_matches_the_python_api(tmp_path):
     assert cm.n_nodes == system.n_nodes == 7
 
 
-def test_builder_cache_dir_relative_to_scene(tmp_path):
+def test_builder_cache_lives_in_the_output_folder(tmp_path):
     model = dict(SQUARE, cache_dir="cache")
-    _, _, cm1 = fe_builder.build(model, {}, tmp_path)
-    _, _, cm2 = fe_builder.build(dict(model), {}, tmp_path)
+    scene_dir, out = tmp_path / "scene", tmp_path / "out"
+    scene_dir.mkdir()
+    _, _, cm1 = fe_builder.build(model, {}, scene_dir, cache_root=out)
+    _, _, cm2 = fe_builder.build(dict(model), {}, scene_dir, cache_root=out)
     assert not cm1.from_cache and cm2.from_cache
-    assert any((tmp_path / "cache").glob("fe-*.npz"))
+    assert any((out / "cache").glob("fe-*.npz"))
+    assert not any(scene_dir.iterdir())  # nothing written beside the scene
+    _, _, cm3 = fe_builder.build(dict(model), {}, scene_dir)  # no output folder: no cache
+    assert not cm3.from_cache and not any(scene_dir.iterdir())
 
 
 def test_builder_geometries(tmp_path):

@@ -157,3 +157,17 @@ def test_scene_from_string_without_file():
     sc = scene_from_string(GOOD)
     assert sc.name == "t" and sc.analyses["bounds"]["plots"] is False
     assert Path.cwd() == sc.directory
+
+
+EXAMPLES = sorted((Path(__file__).resolve().parents[1] / "data" / "scenes").glob("*.toml"))
+
+
+@pytest.mark.parametrize("path", EXAMPLES, ids=[p.name for p in EXAMPLES])
+def test_example_scenes_build(path, tmp_path):
+    from shakedown.output import OutputFolder
+    from shakedown.scenes import build
+
+    sc = load_scene(path)
+    system, load, _ = build(sc, OutputFolder(tmp_path))
+    assert system.n_nodes == load.n_nodes > 0
+    assert not any(p.name.startswith(".") for p in path.parent.iterdir() if p.is_dir())

@@ -13,7 +13,8 @@
     ``dirichlet`` : list of boundary names (or {name = "x" | "y" | "xy"});
     ``contact`` : list of boundary names; ``periodic`` : [master, slave];
     ``friction`` : number or list of N; ``mass`` : bool (condense the mass);
-    ``thickness`` : number; ``cache_dir`` : folder (relative to the scene) of the on-disk cache.
+    ``thickness`` : number; ``cache_dir`` : name of the on-disk cache folder, created inside the output folder (a second run
+    with the same output folder reads the condensed model from it).
 ``[load]`` tables ``static``, ``cyclic`` (cos amplitude), ``cyclic_sin`` (sin amplitude), each
     with ``traction`` ({boundary = [t_x, t_y]}), ``pressure`` ({boundary = p}, compression
     positive), ``body_force`` ([b_x, b_y]), ``displacement`` ({dirichlet boundary = [u_x, u_y]}).
@@ -134,8 +135,12 @@ def _load_cases(load: dict) -> dict:
     return cases
 
 
-def build(model: dict, load: dict, scene_dir: Path):
-    """Build ``(DiscreteSystem, LoadCycle, CondensedModel)`` from the ``[model]``/``[load]`` tables."""
+def build(model: dict, load: dict, scene_dir: Path, cache_root: Path | None = None):
+    """Build ``(DiscreteSystem, LoadCycle, CondensedModel)`` from the ``[model]``/``[load]`` tables.
+
+    A relative ``cache_dir`` is resolved inside ``cache_root`` (the run's output folder, given by
+    the scene runner) so that nothing is written outside it; without ``cache_root`` no cache is used.
+    """
     from .. import fe
 
     for key in model:
@@ -154,8 +159,12 @@ def build(model: dict, load: dict, scene_dir: Path):
             thickness=float(model.get("thickness", 1.0)),
         )
         cache_dir = model.get("cache_dir")
-        cm = fem.condense(mass=bool(model.get("mass", False)),
-                          cache_dir=Path(scene_dir) / cache_dir if cache_dir else None)
+        if cache_dir and cache_root is not None:
+            name = Path(str(cache_dir)).name  # a plain folder name inside the output folder
+            cache_path = Path(cache_root) / name
+        else:
+            cache_path = None
+        cm = fem.condense(mass=bool(model.get("mass", False)), cache_dir=cache_path)
         cycle = cm.load_cycle(
             static="static" if "static" in cm.welded else None,
             cyclic="cyclic" if "cyclic" in cm.welded else None,
