@@ -35,6 +35,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import dense_lp
 from .errors import InputError, ShapeError
 from .loading import LoadCycle
 from .lp import INF, LPAnswer, ReusableLP
@@ -431,6 +432,7 @@ def shakedown_bounds(
     intervals: bool = True,
     adjacency: bool = True,
     separation: bool = True,
+    solver: str = "auto",
 ) -> ShakedownBounds:
     """Shakedown load factors ``lam1 <= lam2`` with certificates (MODEL.md s.3).
 
@@ -448,6 +450,12 @@ def shakedown_bounds(
         Compute ``lam_adj`` (``N`` LPs).
     separation : bool
         Compute the no-separation limit (one LP).
+    solver : {"auto", "highs"}
+        ``"auto"``: dense interior point + basis identification for the ``lam2`` LP, then the
+        lock-step dense dual simplex of :mod:`shakedown.dense_lp` warm-started from the optimal
+        basis for the activity-interval and adjacency LPs; every answer is certified by its
+        optimality conditions and any LP that is not certified is re-solved by HiGHS.
+        ``"highs"``: every LP by HiGHS (one model, warm starts): the reference.
 
     Returns
     -------
@@ -464,6 +472,195 @@ def shakedown_bounds(
     """
     t0 = time.perf_counter()
     cs = extreme_constraints(system, load)
+    if solver not in ("auto", "highs"):
+        raise InputError(f"solver must be 'auto' or 'highs'; got {solver!r}")
+    if lam is not None:
+        lam = _check_lam(lam)
+    out = None
+    if solver == "auto":
+        out = _solve_dense(cs, load, intervals, adjacency, separation)
+    if out is None:
+        out = _solve_highs(cs, load, intervals, adjacency, separation)
+    (lam1, lam2, status, messages, lam_adj, adj_node, limiting, lam_low, lam_high, lam_sep,
+     sep_nodes, v_at_lam2, certificate, residuals, n_lps, iterations) = out
+
+    # safe state at the chosen lam: Chebyshev centre of H(lam)
+    if lam is None:
+        safe_lam = 0.5 * lam1 if np.isfinite(lam1) and lam1 > 0 else 0.0
+    else:
+        safe_lam = lam
+    safe_state, margin = chebyshev_centre(cs, safe_lam, solver=solver)
+
+    return ShakedownBounds(
+        lam1=float(lam1),
+        lam2=float(lam2),
+        status=status,
+        message="; ".join(messages),
+        lam_adj=float(lam_adj),
+        adjacency_node=int(adj_node),
+        limiting_constraint=limiting,
+        lam_low=lam_low,
+        lam_high=lam_high,
+        lam_separation=float(lam_sep),
+        separation_nodes=sep_nodes,
+        safe_lam=float(safe_lam),
+        safe_state=safe_state,
+        safe_margin=float(margin),
+        state_at_lam2=v_at_lam2,
+        certificate=certificate,
+        residuals=residuals,
+        n_lps=int(n_lps),
+        simplex_iterations=int(iterations),
+        solve_time=time.perf_counter() - t0,
+        constraints=cs,
+    )
+
+
+
+
+def _lam1(cs, lam_low, lam_high, lam2, messages):
+    """``lam1`` and the limiting constraint from the activity intervals (module docstring)."""
+    tol = LAM_RTOL * (1.0 if not np.isfinite(lam2) else max(1.0, lam2))
+    never = np.isnan(lam_high)
+    not_at_zero = never | (lam_low > tol)
+    if np.any(not_at_zero):
+        limiting = int(np.argmax(not_at_zero))
+        messages.append(f"{cs.labels()[limiting]} is inactive already at lam = 0")
+        return 0.0, limiting
+    limiting = int(np.nanargmin(lam_high))
+    lam1 = float(lam_high[limiting])
+    if np.isfinite(lam2) and lam1 >= lam2 - tol:
+        lam1 = lam2  # every constraint stays active until H vanishes (Melan case)
+    if np.isinf(lam1):
+        limiting = -1
+    return lam1, limiting
+
+
+def _solve_dense(cs, load, intervals, adjacency, separation):
+    """Dense path (``solver="auto"``); ``None`` when the ``lam2`` LP is not a certified optimum
+    (unbounded, infeasible or degenerate trouble): the caller then uses :func:`_solve_highs`.
+
+    LP ``max e.x, A x <= b`` in ``x = (v, lam)``: rows ``[G, -m] <= c`` and ``-lam <= 0``.
+    """
+    n = cs.n_nodes
+    A = np.vstack([np.hstack([cs.G, -cs.m[:, None]]), np.r_[np.zeros(n), -1.0][None, :]])
+    b = np.r_[cs.c, 0.0]
+    e = np.r_[np.zeros(n), 1.0]
+    main, tab = dense_lp.solve_max(A, b, e)
+    if main is None:
+        return None
+    lam2 = float(main.x[-1])
+    v_at_lam2 = main.x[:n].copy()
+    certificate = main.y[: 2 * n].copy()
+    names = ("primal", "dual", "stationarity", "complementarity")
+    worst = dict(zip(names, main.residuals, strict=True))
+    stats = {"lps": 1, "iters": main.iterations}
+    eng = []  # the HiGHS model, built only if some LP needs it
+
+    def record(ans):
+        stats["lps"] += 1
+        stats["iters"] += ans.iterations
+        if ans.status == "optimal":
+            for k, r in zip(names, ans.residuals, strict=True):
+                worst[k] = max(worst[k], r)
+
+    def highs(sense, tight=(), sep=False):
+        if not eng:
+            eng.append(_Engine(cs))
+        ans = eng[0].run(sense, tight=tight, separation=sep)
+        stats["lps"] += 1
+        stats["iters"] += ans.iterations
+        for k, key in zip(names, ("primal_residual", "dual_residual",
+                                  "stationarity_residual", "complementarity_residual"),
+                          strict=True):
+            if ans.status == "optimal":
+                worst[k] = max(worst[k], getattr(ans, key))
+        return _value(ans)
+
+    def values(answers, sense, tights):
+        out = np.empty(len(answers))
+        for i, (ans, tight) in enumerate(zip(answers, tights, strict=True)):
+            record(ans)
+            if ans.status == "optimal":
+                out[i] = ans.x[-1]
+            elif ans.status == "infeasible":
+                out[i] = np.nan
+            else:
+                out[i] = highs(sense, tight)
+        return out
+
+    messages = []
+    lam_low = np.full(2 * n, np.nan)
+    lam_high = np.full(2 * n, np.nan)
+    lam1, limiting = np.nan, -1
+    lam_adj, adj_node = np.inf, -1
+    if intervals or adjacency:
+        # a dual-feasible basis for "min lam": the lam2 basis with the row lam >= 0 swapped in
+        lamrow = 2 * n
+        T1 = tab.T0.copy()
+        if lamrow not in T1:
+            T1[int(np.argmax(np.abs(tab.W[:, lamrow])))] = lamrow
+        tab0 = dense_lp.Tableau(A, b, -e, T1)
+        start = dense_lp.batch_dual_simplex(tab0, [()])[0] if not tab0.singular else None
+        if start is not None:
+            record(start)
+        if start is not None and start.status == "optimal" and start.iterations:
+            tab0 = dense_lp.Tableau(A, b, -e, start.basis)
+        if start is None or start.status != "optimal" or tab0.singular:
+            tab0 = None
+    if intervals:
+        tights = [(k,) for k in range(2 * n)]
+        lam_high = values(dense_lp.batch_dual_simplex(tab, tights), "max", tights)
+        lam_high[np.isfinite(lam_high)] = np.minimum(lam_high[np.isfinite(lam_high)], lam2)
+        act = [k for k in range(2 * n) if np.isfinite(lam_high[k])]
+        tights = [(k,) for k in act]
+        if tab0 is not None:
+            lo = values(dense_lp.batch_dual_simplex(tab0, tights), "min", tights)
+            lo = np.where(np.isnan(lo), lo, np.maximum(lo, 0.0))  # -0.0 -> 0.0
+        else:
+            lo = np.array([highs("min", t) for t in tights])
+        lam_low[act] = lo
+        lam1, limiting = _lam1(cs, lam_low, lam_high, lam2, messages)
+    if adjacency:
+        tights = [(j, n + j) for j in range(n)]
+        if tab0 is not None:
+            adj = values(dense_lp.batch_dual_simplex(tab0, tights), "min", tights)
+        else:
+            adj = np.array([highs("min", t) for t in tights])
+        adj = np.where(np.isnan(adj), np.inf, np.maximum(adj, 0.0))
+        if np.isfinite(adj).any():
+            adj_node = int(np.argmin(adj))
+            lam_adj = float(adj[adj_node])
+    lam_sep, sep_nodes = np.nan, ()
+    if separation:
+        sep = cs.sep_G @ v_at_lam2 - cs.sep_c - lam2 * cs.sep_m
+        scale = np.abs(cs.sep_G).max(initial=0.0) * max(1.0, np.abs(v_at_lam2).max()) + np.abs(
+            cs.sep_c
+        )
+        if np.all(sep <= 1e-9 * np.maximum(scale, 1e-300)):
+            lam_sep = lam2  # the lam2 optimum already keeps every node in compression
+        else:
+            if not eng:
+                eng.append(_Engine(cs))
+            ans = eng[0].run("max", separation=True)
+            stats["lps"] += 1
+            stats["iters"] += ans.iterations
+            lam_sep = _value(ans)
+            if ans.status == "optimal" and lam_sep < lam2 - 1e-9 * max(1, lam2):
+                duals = ans.row_dual[2 * n :]
+                sep_nodes = tuple(int(j) for j in np.flatnonzero(np.abs(duals) > 1e-12))
+                messages.append(
+                    f"above lam = {lam_sep:.6g} every safe state needs a tensile normal reaction "
+                    f"at node(s) {list(sep_nodes)}"
+                )
+            elif np.isnan(lam_sep):
+                messages.append("no safe state keeps every node in compression, even at lam = 0")
+    return (lam1, lam2, "bounded", messages, lam_adj, adj_node, limiting, lam_low, lam_high,
+            lam_sep, sep_nodes, v_at_lam2, certificate, worst, stats["lps"], stats["iters"])
+
+
+def _solve_highs(cs, load, intervals, adjacency, separation):
+    """Every LP by HiGHS (the reference path)."""
     n = cs.n_nodes
     eng = _Engine(cs)
     scale_m = np.abs(cs.m).max(initial=0.0)
@@ -503,7 +700,6 @@ def shakedown_bounds(
     lam1 = np.nan
     limiting = -1
     if intervals and status != "infeasible":
-        tol = LAM_RTOL * (1.0 if not np.isfinite(lam2) else max(1.0, lam2))
         if main.status == "optimal":
             # constraints tight at the lam2 optimum are active up to lam2 (can't go higher)
             slack = cs.c + lam2 * cs.m - cs.G @ v_at_lam2
@@ -520,19 +716,7 @@ def shakedown_bounds(
             if np.isnan(lam_high[k]):
                 continue  # never active
             lam_low[k] = _value(eng.run("min", tight=(k,)))
-        never = np.isnan(lam_high)
-        not_at_zero = never | (lam_low > tol)
-        if np.any(not_at_zero):
-            lam1 = 0.0
-            limiting = int(np.argmax(not_at_zero))
-            messages.append(f"{cs.labels()[limiting]} is inactive already at lam = 0")
-        else:
-            limiting = int(np.nanargmin(lam_high))
-            lam1 = float(lam_high[limiting])
-            if np.isfinite(lam2) and lam1 >= lam2 - tol:
-                lam1 = lam2  # every constraint stays active until H vanishes (Melan case)
-            if np.isinf(lam1):
-                limiting = -1
+        lam1, limiting = _lam1(cs, lam_low, lam_high, lam2, messages)
 
     lam_adj, adj_node = np.inf, -1
     if adjacency and status != "infeasible":
@@ -555,50 +739,32 @@ def shakedown_bounds(
         elif np.isnan(lam_sep):
             messages.append("no safe state keeps every node in compression, even at lam = 0")
 
-    # safe state at the chosen lam: Chebyshev centre of H(lam)
-    if lam is None:
-        safe_lam = 0.5 * lam1 if np.isfinite(lam1) and lam1 > 0 else 0.0
-    else:
-        safe_lam = _check_lam(lam)
-    safe_state, margin = chebyshev_centre(cs, safe_lam)
-
-    residuals = dict(eng.worst)
-    return ShakedownBounds(
-        lam1=float(lam1),
-        lam2=float(lam2),
-        status=status,
-        message="; ".join(messages),
-        lam_adj=float(lam_adj),
-        adjacency_node=int(adj_node),
-        limiting_constraint=limiting,
-        lam_low=lam_low,
-        lam_high=lam_high,
-        lam_separation=float(lam_sep),
-        separation_nodes=sep_nodes,
-        safe_lam=float(safe_lam),
-        safe_state=safe_state,
-        safe_margin=float(margin),
-        state_at_lam2=v_at_lam2,
-        certificate=certificate,
-        residuals=residuals,
-        n_lps=eng.lp.n_solves,
-        simplex_iterations=eng.lp.total_iterations,
-        solve_time=time.perf_counter() - t0,
-        constraints=cs,
-    )
+    return (lam1, lam2, status, messages, lam_adj, adj_node, limiting, lam_low, lam_high,
+            lam_sep, sep_nodes, v_at_lam2, certificate, dict(eng.worst), eng.lp.n_solves,
+            eng.lp.total_iterations)
 
 
-def chebyshev_centre(cs: ConstraintSet, lam: float):
+def chebyshev_centre(cs: ConstraintSet, lam: float, *, solver: str = "auto"):
     """Centre and radius of the largest ball in ``H(lam)`` (``(empty, -inf)`` if ``H`` empty).
 
     The radius is capped at ``1e6`` times the natural slip scale so that unbounded regions
-    return a finite point.
+    return a finite point.  ``solver="auto"`` tries the dense interior point (certified vertex)
+    first and falls back to HiGHS; ``"highs"`` uses HiGHS only.
     """
     n = cs.n_nodes
     norms = np.linalg.norm(cs.G, axis=1)
     b = cs.offsets(lam)
     rows = np.hstack([cs.G, norms[:, None]])
     scale = np.abs(b).max(initial=1.0) / max(norms.min(initial=1.0), 1e-300)
+    if solver == "auto":
+        cap = np.r_[np.zeros(n), 1.0]
+        ans, _ = dense_lp.solve_max(
+            np.vstack([rows, cap]), np.r_[b, 1e6 * max(scale, 1.0)], cap
+        )
+        if ans is not None:
+            if ans.x[-1] < 0:
+                return np.zeros(0), -np.inf
+            return ans.x[:n], float(ans.x[-1])
     lp = ReusableLP(
         rows,
         np.full(2 * n, -np.inf),

@@ -13,8 +13,8 @@
     ``dirichlet`` : list of boundary names (or {name = "x" | "y" | "xy"});
     ``contact`` : list of boundary names; ``periodic`` : [master, slave];
     ``friction`` : number or list of N; ``mass`` : bool (condense the mass);
-    ``thickness`` : number; ``cache_dir`` : name of the on-disk cache folder, created inside the output folder (a second run
-    with the same output folder reads the condensed model from it).
+    ``thickness`` : number; ``cache_dir`` : name of the on-disk cache folder, created inside
+    the output folder (a second run with the same output folder reads the condensed model).
 ``[load]`` tables ``static``, ``cyclic`` (cos amplitude), ``cyclic_sin`` (sin amplitude), each
     with ``traction`` ({boundary = [t_x, t_y]}), ``pressure`` ({boundary = p}, compression
     positive), ``body_force`` ([b_x, b_y]), ``displacement`` ({dirichlet boundary = [u_x, u_y]}).
