@@ -65,11 +65,13 @@ def _parse_value(text: str):
 
 
 def _apply_overrides(scene, names, overrides):
+    """Apply ``--set [analysis.]key=value`` options on top of the scene's analysis tables."""
     from dataclasses import replace
 
     from .scenes import validate_options
 
-    analyses = {k: dict(v) for k, v in scene.analyses.items()}
+    raw = {name: dict(opts) for name, opts in scene.raw.get("analyses", {}).items()}
+    touched = []
     for item in overrides:
         if "=" not in item:
             raise SceneError(f"--set {item!r}: expected KEY=VALUE (e.g. --set lam=1.2)")
@@ -80,10 +82,11 @@ def _apply_overrides(scene, names, overrides):
             name = names[0]
         else:
             raise SceneError(f"--set {item!r}: name the analysis, e.g. --set {names[0]}.{key}=...")
-        raw = {k: v for k, v in scene.raw.get("analyses", {}).get(name, {}).items()}
-        raw.update({k2: v2 for k2, v2 in analyses.get(name, {}).items() if k2 in raw})
-        raw[key] = _parse_value(value)
-        analyses[name] = validate_options(f"--set {item}", name, raw)
+        raw.setdefault(name, {})[key] = _parse_value(value)
+        touched.append(name)
+    analyses = dict(scene.analyses)
+    for name in dict.fromkeys(touched):
+        analyses[name] = validate_options(f"{scene.label} (with --set)", name, raw[name])
     return replace(scene, analyses=analyses)
 
 

@@ -171,3 +171,14 @@ def test_example_scenes_build(path, tmp_path):
     system, load, _ = build(sc, OutputFolder(tmp_path))
     assert system.n_nodes == load.n_nodes > 0
     assert not any(p.name.startswith(".") for p in path.parent.iterdir() if p.is_dir())
+
+
+def test_cli_several_set_options_accumulate(tmp_path):
+    scene = write(tmp_path, GOOD.replace("[analyses.bounds]\nplots = false\n", ""))
+    from shakedown.cli import _apply_overrides
+
+    sc = _apply_overrides(load_scene(scene), ["bounds"], ["lam=0.2", "bounds.plots=false", "adjacency=false"])
+    assert sc.analyses["bounds"]["lam"] == 0.2
+    assert sc.analyses["bounds"]["plots"] is False and sc.analyses["bounds"]["adjacency"] is False
+    with pytest.raises(sd.SceneError, match="--set"):
+        _apply_overrides(load_scene(scene), ["bounds"], ["plots=maybe"])

@@ -1,0 +1,366 @@
+"""Plots of cyclic evolutions (seed 002 Figs. 2, 5-8).
+
+Every function takes ``ax=None`` (a new figure is made) and returns the axes it drew on.
+matplotlib is imported here, not by :mod:`shakedown`.
+
+* :func:`plot_dissipation` -- ``W`` per cycle (optionally on a log scale, or the distance to the
+  steady value, which shows geometric convergence as a straight line).
+* :func:`plot_steady_cycle` -- slips and reactions of the steady cycle against time.
+* :func:`plot_node_states` -- node x time image of the node states.
+* :func:`plot_trajectory` -- two-node trajectories in ``v`` space or ``tau = A v`` space over the
+  constraint lines ``I_j``, ``II_j`` of MODEL.md s.3 (extreme positions dashed).
+* :func:`plot_uniqueness` -- steady ``W`` of every initial state of a uniqueness study.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import InputError
+
+__all__ = [
+    "plot_dissipation",
+    "plot_steady_cycle",
+    "plot_node_states",
+    "plot_trajectory",
+    "plot_uniqueness",
+    "STATE_ORDER",
+]
+
+#: Display order (and colour index) of node-state labels; unknown labels are appended.
+STATE_ORDER = ("stick", "slip+", "forward", "slip-", "backward", "open", "separation")
+_STATE_COLOURS = {
+    "stick": "#d9d9d9", "slip+": "#d62728", "forward": "#d62728", "slip-": "#1f77b4",
+    "backward": "#1f77b4", "open": "#2ca02c", "separation": "#2ca02c",
+}
+
+
+def _plt():
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _new_ax(ax, **kw):
+    if ax is None:
+        fig, ax = _plt().subplots(**kw)
+    return ax
+
+
+def _dissipation_array(run):
+    W = getattr(run, "dissipation", run)
+    try:
+        W = np.asarray(W, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InputError(
+            "plot_dissipation needs a CycleRun or an array of W per cycle; got "
+            f"{type(run).__name__}"
+        ) from exc
+    if W.ndim != 1:
+        raise InputError(f"W per cycle must be 1-D; got shape {W.shape}")
+    return W
+
+
+def plot_dissipation(run, ax=None, *, log: bool = False, relative: bool = False, **line_kw):
+    """Dissipation per cycle ``W_k`` against the cycle number ``k = 1, 2, ...``.
+
+    Parameters
+    ----------
+    run : CycleRun or array_like, shape (n_cycles,)
+    ax : matplotlib Axes, optional
+    log : bool
+        Logarithmic ``W`` axis (cycles with ``W <= 0`` are not shown).
+    relative : bool
+        Plot ``|W_k - W_steady|`` instead (``W_steady`` from ``run.steady_dissipation``, else the
+        last cycle): geometric convergence (seed 002 Fig. 8) is a straight line on a log axis.
+    **line_kw
+        Passed to ``ax.plot``.
+
+    Returns
+    -------
+    matplotlib Axes
+    """
+    W = _dissipation_array(run)
+    ax = _new_ax(ax)
+    k = np.arange(1, W.size + 1)
+    y = W
+    label = "W per cycle"
+    if relative:
+        ref = float(getattr(run, "steady_dissipation", np.nan))
+        if not np.isfinite(ref):
+            ref = float(W[-1]) if W.size else 0.0
+        y = np.abs(W - ref)
+        label = "|W - W_steady|"
+        log = True
+    if log:
+        y = np.where(y > 0, y, np.nan)
+    line_kw.setdefault("marker", "o")
+    line_kw.setdefault("markersize", 3)
+    ax.plot(k, y, **line_kw)
+    if log:
+        ax.set_yscale("log")
+    ax.set_xlabel("cycle")
+    ax.set_ylabel(label)
+    return ax
+
+
+def _steady_frame(run):
+    table = getattr(run, "steady_table", run)
+    if table is None or not hasattr(table, "columns"):
+        raise InputError(
+            "need a CycleRun / SteadyCycle with a steady_table, or that table (DataFrame with "
+            f"columns t, node, slip, q, p, state); got {type(run).__name__}"
+        )
+    missing = {"t", "node", "slip", "q", "p", "state"} - set(table.columns)
+    if missing:
+        raise InputError(f"the steady table lacks columns {sorted(missing)}")
+    if len(table) == 0:
+        raise InputError("the steady table is empty: no steady cycle was reached")
+    return table
+
+
+def plot_steady_cycle(run, ax=None, *, nodes=None):
+    """Slips (top) and reactions ``q`` (solid), ``p`` (dashed) (bottom) over the steady cycle.
+
+    Parameters
+    ----------
+    run : CycleRun, SteadyCycle or DataFrame
+        Anything with a ``steady_table`` (columns ``t, node, slip, q, p``), or that table.
+    ax : sequence of two Axes, optional
+    nodes : sequence of int, optional
+        Nodes to draw (all by default; the first 10 when there are more than 10).
+
+    Returns
+    -------
+    ndarray of two Axes
+    """
+    tab = _steady_frame(run)
+    all_nodes = np.unique(tab["node"].to_numpy(int))
+    nodes = all_nodes[:10] if nodes is None else np.asarray(nodes, int)
+    if ax is None:
+        fig, ax = _plt().subplots(2, 1, sharex=True, figsize=(6.4, 5.6))
+    ax = np.asarray(ax).ravel()
+    if ax.size != 2:
+        raise InputError(f"plot_steady_cycle needs two axes; got {ax.size}")
+    colours = _plt().rcParams["axes.prop_cycle"].by_key()["color"]
+    for i, j in enumerate(nodes):
+        sub = tab[tab["node"] == j].sort_values("t")
+        c = colours[i % len(colours)]
+        ax[0].plot(sub["t"], sub["slip"], color=c, label=f"node {j}")
+        ax[1].plot(sub["t"], sub["q"], color=c, label=f"q node {j}")
+        ax[1].plot(sub["t"], sub["p"], color=c, ls="--", label=f"p node {j}")
+    ax[0].set_ylabel("slip v")
+    ax[1].set_ylabel("reactions q (solid), p (dashed)")
+    ax[1].set_xlabel("t [cycles]")
+    ax[0].legend(fontsize="small")
+    return ax
+
+
+def plot_node_states(run, ax=None):
+    """Node x time image of the node states over the steady cycle.
+
+    Parameters
+    ----------
+    run : CycleRun, SteadyCycle or DataFrame
+        Anything with a ``steady_table`` (columns ``t, node, state``), or that table.
+
+    Returns
+    -------
+    matplotlib Axes
+    """
+    from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Patch
+
+    tab = _steady_frame(run)
+    tab = tab.assign(state=tab["state"].astype(str))
+    labels = [s for s in STATE_ORDER if s in set(tab["state"])]
+    labels += sorted(set(tab["state"]) - set(labels))
+    code = {s: i for i, s in enumerate(labels)}
+    grid = tab.assign(code=tab["state"].map(code)).pivot_table(
+        index="node", columns="t", values="code", aggfunc="first"
+    )
+    t = grid.columns.to_numpy(float)
+    ax = _new_ax(ax)
+    cmap = ListedColormap([_STATE_COLOURS.get(s, "#9467bd") for s in labels])
+    dt = np.diff(t).min() if t.size > 1 else 1.0
+    extent = (t[0] - dt, t[-1], grid.index.max() + 0.5, grid.index.min() - 0.5)
+    ax.imshow(grid.to_numpy(float), aspect="auto", interpolation="nearest", cmap=cmap,
+              vmin=-0.5, vmax=len(labels) - 0.5, extent=extent)
+    ax.legend(handles=[Patch(color=cmap(i), label=s) for i, s in enumerate(labels)],
+              fontsize="small", loc="upper right")
+    ax.set_yticks(grid.index.to_numpy(int) if len(grid.index) <= 20 else ax.get_yticks())
+    ax.set_xlabel("t [cycles]")
+    ax.set_ylabel("node")
+    return ax
+
+
+def _lines(system, load, lam, times):
+    from ..bounds import extreme_constraints
+
+    cs = extreme_constraints(system, load)
+    extreme = cs.offsets(lam)
+    inst = [cs.instantaneous(system, load, float(t), lam) for t in times]
+    return cs.G, extreme, inst
+
+
+def _path(table):
+    """Slips of a time-series table in time order, shape (n_times, N)."""
+    return table.pivot_table(index="t", columns="node", values="slip",
+                             aggfunc="last").sort_index().to_numpy(float)
+
+
+def _trajectory_arrays(trajectories):
+    if trajectories is None:
+        return []
+    if hasattr(trajectories, "cycle_start_slips") or (
+        isinstance(trajectories, np.ndarray) and trajectories.ndim == 2
+    ):
+        trajectories = [trajectories]
+    out = []
+    for tr in trajectories:
+        if hasattr(tr, "cycle_start_slips"):
+            tab = getattr(tr, "steady_table", None)
+            hist = getattr(tr, "history", None)
+            starts = np.asarray(tr.cycle_start_slips, float)
+            if hist is not None and len(hist):  # the whole path (record_history=True)
+                starts = _path(hist)
+            loop = None
+            if tab is not None and len(tab) and int(getattr(tr, "period", 1)) > 0:
+                loop = _path(tab)
+            out.append((starts, loop))
+        else:
+            arr = np.asarray(tr, float)
+            if arr.ndim != 2 or arr.shape[1] != 2:
+                raise InputError(f"a trajectory must have shape (n_points, 2); got {arr.shape}")
+            out.append((None, arr))
+    return out
+
+
+def plot_trajectory(system, load, lam: float, trajectories=None, ax=None, *, space: str = "v",
+                    times=(), extremes: bool = True, shade_safe: bool = True, labels=None):
+    """Two-node state trajectories over the moving constraint lines (seed 002 Figs. 2-8).
+
+    The constraint lines are ``G_k . v = b_k`` with ``G = [A - F B^T; -(A + F B^T)]`` (MODEL.md
+    s.3: ``I_j``, then ``II_j``); in ``tau = A v`` space they are ``G_k A^-1 tau = b_k`` (for
+    ``B = 0`` perpendicular to the axes, seed 002 Fig. 7).
+
+    Parameters
+    ----------
+    system : DiscreteSystem
+        Two nodes.
+    load : LoadCycle
+    lam : float
+    trajectories : CycleRun, array (n_points, 2), or a list of them, optional
+        A ``CycleRun`` is drawn as its whole path if it was run with ``record_history=True``
+        (thin line), else as its cycle-start states (dots joined by a thin line: the approach
+        to the steady state), and its steady loop (thick line); an array as a path.
+    ax : matplotlib Axes, optional
+    space : {"v", "tau"}
+    times : sequence of float
+        Also draw the instantaneous constraint lines at these times (cycles), thin solid.
+    extremes : bool
+        Draw the extreme positions of the 4 constraints, dashed (``I^E, II^E, III^E, IV^E``
+        of the seed are ``I_0, II_0, I_1, II_1`` here).
+    shade_safe : bool
+        Shade the safe shakedown region ``H(lam)`` when it is a bounded non-empty polygon.
+    labels : sequence of str, optional
+        Legend labels of the trajectories.
+
+    Returns
+    -------
+    matplotlib Axes
+    """
+    if system.n_nodes != 2:
+        raise InputError(f"plot_trajectory is for two-node systems; got N = {system.n_nodes}")
+    if space not in ("v", "tau"):
+        raise InputError(f"space must be 'v' or 'tau'; got {space!r}")
+    ax = _new_ax(ax)
+    G, b_ext, b_inst = _lines(system, load, float(lam), times)
+    T = np.eye(2) if space == "v" else system.A  # point map v -> plotted coordinates
+    Gs = G if space == "v" else G @ np.linalg.inv(system.A)
+    trajs = _trajectory_arrays(trajectories)
+    pts = [np.zeros((1, 2))]
+    colours = _plt().rcParams["axes.prop_cycle"].by_key()["color"]
+    for i, (starts, loop) in enumerate(trajs):
+        c = colours[i % len(colours)]
+        lab = labels[i] if labels is not None and i < len(labels) else f"trajectory {i + 1}"
+        if starts is not None and len(starts):
+            s = starts @ T.T
+            ax.plot(s[:, 0], s[:, 1], color=c, lw=0.8, marker="o" if len(s) <= 300 else None,
+                    ms=3, alpha=0.7)
+            pts.append(s)
+            lab_start = None
+        else:
+            lab_start = lab
+        if loop is not None and len(loop):
+            l_ = loop @ T.T
+            l_ = np.vstack([l_, l_[:1]]) if starts is not None else l_
+            ax.plot(l_[:, 0], l_[:, 1], color=c, lw=2.2, label=lab if lab_start is None else lab)
+            pts.append(l_)
+    # view box: trajectories and the safe region / line intersections
+    from ..bounds import _polygon_2d
+
+    poly = _polygon_2d(G, b_ext) if extremes else np.zeros((0, 2))
+    if len(poly):
+        pts.append(poly @ T.T)
+    for k in range(G.shape[0] if len(pts) == 1 else 0):  # nothing else to frame: corners
+        for m in range(k + 1, G.shape[0]):
+            M = np.array([G[k], G[m]])
+            if abs(np.linalg.det(M)) > 1e-12 * np.abs(M).max() ** 2:
+                pts.append((np.linalg.solve(M, [b_ext[k], b_ext[m]]) @ T.T)[None, :])
+    allp = np.vstack(pts)
+    lo, hi = allp.min(axis=0), allp.max(axis=0)
+    pad = 0.15 * max(float(np.max(hi - lo)), 1e-12)
+    lo, hi = lo - pad, hi + pad
+    if shade_safe and len(poly) >= 3:
+        P = poly @ T.T
+        ax.fill(P[:, 0], P[:, 1], color="0.85", zorder=0, label="safe region H")
+    # seed 002 numbering: I, II for node 0 (rows 0, 2), III, IV for node 1 (rows 1, 3)
+    names = ["I (I_0)", "III (I_1)", "II (II_0)", "IV (II_1)"]
+    styles = ["C3", "C0", "C1", "C2"]
+    for k in range(4):
+        offs = ([b_ext[k]] if extremes else []) + [b[k] for b in b_inst]
+        for i, b in enumerate(offs):
+            dashed = extremes and i == 0
+            _axline(ax, Gs[k], b, color=styles[k], ls="--" if dashed else "-",
+                    lw=1.0 if dashed else 0.6, alpha=1.0 if dashed else 0.5,
+                    label=f"{names[k]} extreme" if dashed else None)
+    ax.set_xlim(lo[0], hi[0])
+    ax.set_ylim(lo[1], hi[1])
+    x, y = ("v", "v") if space == "v" else ("tau", "tau")
+    ax.set_xlabel(f"{x}_0")
+    ax.set_ylabel(f"{y}_1")
+    ax.legend(fontsize="small")
+    return ax
+
+
+def _axline(ax, g, b, **kw):
+    """Infinite line ``g . x = b``."""
+    g = np.asarray(g, float)
+    p0 = g * b / float(g @ g)
+    d = np.array([-g[1], g[0]])
+    return ax.axline(tuple(p0), tuple(p0 + d), **kw)
+
+
+def plot_uniqueness(study, ax=None):
+    """Steady ``W`` of every initial state of a :class:`~shakedown.steady.UniquenessStudy`.
+
+    Runs that shook down are drawn as open circles, runs in cyclic slip as dots, runs that did
+    not reach a steady cycle as crosses at ``W = 0``.
+    """
+    tab = getattr(study, "table", study)
+    if not hasattr(tab, "columns") or "steady_dissipation" not in tab.columns:
+        raise InputError("plot_uniqueness needs a UniquenessStudy or its table")
+    ax = _new_ax(ax)
+    W = tab["steady_dissipation"].to_numpy(float)
+    i = tab["state"].to_numpy(int) if "state" in tab else np.arange(len(tab))
+    sd_ = tab["shook_down"].to_numpy(bool)
+    ok = np.isfinite(W)
+    ax.plot(i[ok & sd_], W[ok & sd_], "o", mfc="none", label="shook down")
+    ax.plot(i[ok & ~sd_], W[ok & ~sd_], ".", ms=8, label="cyclic slip")
+    if (~ok).any():
+        ax.plot(i[~ok], np.zeros((~ok).sum()), "x", label="no steady cycle")
+    ax.set_xlabel("initial state")
+    ax.set_ylabel("steady W per cycle")
+    ax.legend(fontsize="small")
+    return ax
