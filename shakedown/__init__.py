@@ -32,6 +32,8 @@ _LAZY = {
     "uniqueness_study": "steady",
     "steady_cycle": "steady",
     "UniquenessStudy": "steady",
+    "SteadyCycle": "steady",
+    "sample_initial_slips": "steady",
     "solve_step": "complementarity",
     "stability": None,
     "fe": None,
