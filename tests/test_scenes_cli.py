@@ -182,3 +182,21 @@ def test_cli_several_set_options_accumulate(tmp_path):
     assert sc.analyses["bounds"]["plots"] is False and sc.analyses["bounds"]["adjacency"] is False
     with pytest.raises(sd.SceneError, match="--set"):
         _apply_overrides(load_scene(scene), ["bounds"], ["plots=maybe"])
+
+
+def test_every_analysis_writes_named_files(tmp_path):
+    """bounds, cycles and stability on small scenes: every file has a proper name and extension."""
+    fe_scene = Path(__file__).resolve().parents[1] / "data" / "scenes" / "fe_unit_square.toml"
+    runs = [
+        (["bounds", "two_node_coupled"], {"bounds.json", "constraints.csv", "bounds_vs_lam.png"}),
+        (["cycles", "two_node_coupled", "--set", "lam=1.0", "--set", "max_cycles=20"],
+         {"cycles.json", "dissipation.csv", "steady_cycle.csv", "dissipation.png"}),
+        (["stability", str(fe_scene)], {"stability.json", "partition.csv"}),
+    ]
+    for args, expected in runs:
+        out = tmp_path / args[0]
+        assert main([*args, "-q", "-o", str(out)]) == 0
+        names = {p.name for p in out.iterdir() if p.is_file()}
+        assert expected <= names, (args[0], names)
+        assert all("." in n for n in names), names
+        json.loads((out / "summary.json").read_text())

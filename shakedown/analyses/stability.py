@@ -71,10 +71,10 @@ def run(ctx, options: dict) -> dict:
             f"[analyses.stability] key 'method' must be one of {METHODS}; got {options['method']!r}"
         )
     part = _partition(ctx, options)
-    ctx.output.write_table("partition", part.table())
+    ctx.output.write_table("partition.csv", part.table())
     if part.slip.size == 0:
         summary = {"status": "no slip node", "mu_star": float("inf"), **part.counts()}
-        ctx.output.write_json("stability", summary)
+        ctx.output.write_json("stability.json", summary)
         return summary
     res = mceip_mu(ctx.system.K, part, method=options["method"])
     ctx.log(str(res))
@@ -90,7 +90,7 @@ def run(ctx, options: dict) -> dict:
         "borderline_nodes": part.borderline.tolist(),
     }
     if res.found:
-        ctx.output.write_table("mode", pd.DataFrame(
+        ctx.output.write_table("mode.csv", pd.DataFrame(
             {"node": res.nodes, "chi": res.chi, "x": res.mode, "y": res.y}))
     fig_mode = fig_curves = None
     if options["lam_max"] > 0:
@@ -105,7 +105,7 @@ def run(ctx, options: dict) -> dict:
             raise SceneError(f"[analyses.stability] key 'n_lam' must be >= 2; got {options['n_lam']}")
         lams = np.linspace(0.0, options["lam_max"], options["n_lam"])
         curves = lam_mu_curves(model, part, lams, progress=ctx.progress)
-        ctx.output.write_table("curves", curves.table())
+        ctx.output.write_table("curves.csv", curves.table())
         summary["returning_points"] = [
             {"lam": r.lam, "mu": r.mu, "kind": r.kind} for r in curves.returning_points]
         growth = None
@@ -123,11 +123,11 @@ def run(ctx, options: dict) -> dict:
 
         coords = getattr(ctx.model, "node_coordinates", None)
         fig_mode = plot_mode(res, coords).figure
-    for name, fig in (("mode", fig_mode), ("lam_mu", fig_curves)):
+    for name, fig in (("mode.png", fig_mode), ("lam_mu.png", fig_curves)):
         if fig is not None:
             ctx.output.save_figure(name, fig)
             import matplotlib.pyplot as plt
 
             plt.close(fig)
-    ctx.output.write_json("stability", summary)
+    ctx.output.write_json("stability.json", summary)
     return summary
