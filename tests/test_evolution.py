@@ -368,3 +368,37 @@ def test_runs_are_bit_reproducible_whatever_ran_before():
     again = sd.solve_cycles(s, load, 1.3 * lam2, steps_per_cycle=32)
     assert np.array_equal(first.dissipation, again.dissipation)
     assert np.array_equal(first.final_slip, again.final_slip)
+
+
+def test_load_factor_exactly_at_lam1_and_lam2():
+    """Two-node coupled system (built-in scene two_node_coupled) at the bounds themselves.
+
+    At lam1 every constraint is still active (closed interval), so every sampled state shakes down
+    (Ahn et al. 2008 for two nodes). At lam2 the safe region is a single point: a run that shakes
+    down must end exactly there, and one that does not has W > 0. Both methods must agree.
+    """
+    from shakedown.scenes import build, load_scene
+
+    s, load, _ = build(load_scene("two_node_coupled"))
+    b = sd.shakedown_bounds(s, load)
+    assert sd.safe_region(s, load, b.lam2).area() == pytest.approx(0.0, abs=1e-12)
+    starts = [np.zeros(2), *np.random.default_rng(1).normal(size=(5, 2)) * 0.5]
+    outcomes = []
+    for v0 in starts:
+        runs = [sd.solve_cycles(s, load, b.lam1, initial_slip=v0, steps_per_cycle=64,
+                                max_cycles=400, method=m) for m in ("implicit", "events")]
+        assert all(r.status == "periodic" and r.shook_down for r in runs)
+        for method in ("implicit", "events"):
+            r = sd.solve_cycles(s, load, b.lam2, initial_slip=v0, steps_per_cycle=64,
+                                max_cycles=400, method=method)
+            assert r.status == "periodic" and r.max_residual <= 1e-8
+            if r.shook_down:
+                # the only safe state left.  The approach to it is geometric and the run stops once
+                # the per-cycle change is below tol; the distance left is about that change over
+                # (1 - rate), here ~1e-5 on slips of order 0.1: atol 1e-4 (0.1 % of the scale)
+                np.testing.assert_allclose(r.final_slip, b.state_at_lam2, atol=1e-4)
+            else:
+                assert r.steady_dissipation > 0
+            outcomes.append((method, r.shook_down))
+    # the initial state decides at lam2; both methods see the same outcome for each start
+    assert [o for m, o in outcomes if m == "implicit"] == [o for m, o in outcomes if m == "events"]
