@@ -1,0 +1,299 @@
+"""Shakedown-bounds engine: cross-checks, certificates, extremes and bad input (MODEL.md s.3).
+
+Tolerances: the engine's LP answers are vertices computed in double precision and certified
+to residuals <= 1e-7 (``dense_lp.CERT_TOL``); on the well-conditioned random systems used here
+the vertices agree with an independent vertex computation to ~1e-12, so 1e-8 relative leaves
+four orders of margin.  HiGHS works to its default feasibility tolerance 1e-7, so comparisons
+with HiGHS answers use 1e-6.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+import shakedown as sd
+from shakedown.bounds import extreme_constraints, safe_region, shakedown_bounds
+
+
+def random_problem(n, seed=0, friction=0.3, coupling=0.3, harmonics=1):
+    rng = np.random.default_rng(seed)
+    M = rng.standard_normal((2 * n, 2 * n)) / np.sqrt(2 * n)
+    K = M @ M.T + np.eye(2 * n)
+    system = sd.DiscreteSystem(K[:n, :n], coupling * K[:n, n:], K[n:, n:], friction)
+    shape = (harmonics, n)
+    load = sd.LoadCycle.from_harmonics(
+        0.1 * rng.standard_normal(n), 1 + rng.random(n),
+        q_cos=rng.standard_normal(shape), q_sin=rng.standard_normal(shape),
+        p_cos=0.3 * rng.standard_normal(shape),
+    )
+    return system, load
+
+
+def brute_force(cs):
+    """lam2 and activity intervals from every vertex of P = {(v, lam): G v - m lam <= c, lam >= 0}
+    (all (N+1)-subsets of the 2N+1 rows; no LP)."""
+    n = cs.n_nodes
+    A = np.vstack([np.hstack([cs.G, -cs.m[:, None]]), np.r_[np.zeros(n), -1.0]])
+    b = np.r_[cs.c, 0.0]
+    verts, tight = [], []
+    for S in itertools.combinations(range(2 * n + 1), n + 1):
+        M = A[list(S)]
+        if abs(np.linalg.det(M)) < 1e-12:
+            continue
+        x = np.linalg.solve(M, b[list(S)])
+        slack = b - A @ x
+        if np.all(slack >= -1e-10 * (1 + np.abs(b))):
+            verts.append(x)
+            tight.append(np.abs(slack) <= 1e-10 * (1 + np.abs(b)))
+    verts, tight = np.array(verts), np.array(tight)
+    lam2 = verts[:, -1].max()
+    lo = np.array([verts[tight[:, k], -1].min() if tight[:, k].any() else np.nan
+                   for k in range(2 * n)])
+    hi = np.array([verts[tight[:, k], -1].max() if tight[:, k].any() else np.nan
+                   for k in range(2 * n)])
+    return lam2, lo, hi
+
+
+def check_certificate(b):
+    """The lam2 certificate: G^T y = 0, y >= 0, lam2 = c.y / (-m.y) (Farkas for lam > lam2)."""
+    cs, y = b.constraints, b.certificate
+    scale = np.abs(cs.G).max() * np.abs(y).max()
+    assert np.all(y >= -1e-12 * np.abs(y).max())
+    assert np.abs(cs.G.T @ y).max() <= 1e-9 * scale
+    assert np.isclose(cs.c @ y / (-(cs.m @ y)), b.lam2, rtol=1e-9)
+    # the state at lam2 is safe and tight where y > 0 (complementarity)
+    slack = cs.offsets(b.lam2) - cs.G @ b.state_at_lam2
+    assert slack.min() >= -1e-9 * (1 + np.abs(cs.c).max())
+    assert np.abs(y * slack).max() <= 1e-9 * np.abs(y).max() * (1 + np.abs(cs.c).max())
+
+
+# ---------------------------------------------------------------------- cross-checks
+@pytest.mark.parametrize("n", [2, 3])
+@pytest.mark.parametrize("seed", range(6))
+def test_vertex_enumeration(n, seed):
+    system, load = random_problem(n, seed, coupling=0.5)
+    b = shakedown_bounds(system, load)
+    lam2, lo, hi = brute_force(b.constraints)
+    assert b.lam2 == pytest.approx(lam2, rel=1e-8)
+    np.testing.assert_allclose(b.lam_high, hi, rtol=1e-8, atol=1e-12)
+    np.testing.assert_allclose(b.lam_low, lo, rtol=1e-8, atol=1e-12)
+    check_certificate(b)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_against_cvxpy(seed):
+    cp = pytest.importorskip("cvxpy")
+    system, load = random_problem(6, seed, harmonics=2)
+    b = shakedown_bounds(system, load, adjacency=False)
+    cs = extreme_constraints(system, load)
+    n = cs.n_nodes
+
+    def solve(sense, extra=()):
+        v, lam = cp.Variable(n), cp.Variable()
+        cons = [cs.G @ v <= cs.c + lam * cs.m, lam >= 0]
+        cons += [cs.G[k] @ v == cs.c[k] + lam * cs.m[k] for k in extra]
+        p = cp.Problem(sense(lam), cons)
+        p.solve(solver=cp.HIGHS)
+        return p.value if p.status == "optimal" else np.nan
+
+    assert b.lam2 == pytest.approx(solve(cp.Maximize), rel=1e-8)
+    hi = np.array([solve(cp.Maximize, (k,)) for k in range(2 * n)])
+    lo = np.array([solve(cp.Minimize, (k,)) for k in range(2 * n)])
+    np.testing.assert_allclose(b.lam_high, hi, rtol=1e-8, atol=1e-10)
+    np.testing.assert_allclose(b.lam_low, lo, rtol=1e-8, atol=1e-10)
+
+
+@pytest.mark.parametrize("n,seed", [(4, 0), (12, 1), (40, 2)])
+def test_auto_agrees_with_highs(n, seed):
+    system, load = random_problem(n, seed)
+    a = shakedown_bounds(system, load)
+    h = shakedown_bounds(system, load, solver="highs")
+    assert a.status == h.status == "bounded"
+    for name in ("lam1", "lam2", "lam_adj", "lam_separation", "safe_margin"):
+        assert getattr(a, name) == pytest.approx(getattr(h, name), rel=1e-6), name
+    assert a.adjacency_node == h.adjacency_node
+    np.testing.assert_allclose(a.lam_high, h.lam_high, rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(a.lam_low, h.lam_low, rtol=1e-6, atol=1e-9)
+    assert max(a.residuals.values()) <= 1e-7
+    check_certificate(a)
+
+
+def test_safe_state_is_safe_and_central():
+    system, load = random_problem(8, 3)
+    b = shakedown_bounds(system, load, lam=0.05)
+    H = safe_region(system, load, 0.05)
+    assert H.contains(b.safe_state)
+    dist = H.slack(b.safe_state) / np.linalg.norm(H.normals, axis=1)
+    assert dist.min() == pytest.approx(b.safe_margin, rel=1e-8)
+
+
+# ---------------------------------------------------------------------- invariances
+def test_permutation_invariance():
+    system, load = random_problem(7, 4)
+    perm = np.random.default_rng(0).permutation(7)
+    ix = np.ix_(perm, perm)
+    s2 = sd.DiscreteSystem(system.A[ix], system.B[ix], system.C[ix], system.friction[perm])
+    b1 = shakedown_bounds(system, load)
+    b2 = shakedown_bounds(s2, load.permuted(perm))
+    assert b2.lam1 == pytest.approx(b1.lam1, rel=1e-9)
+    assert b2.lam2 == pytest.approx(b1.lam2, rel=1e-9)
+    assert b2.lam_adj == pytest.approx(b1.lam_adj, rel=1e-9)
+    assert perm[b2.adjacency_node] == b1.adjacency_node
+    idx = np.r_[perm, 7 + perm]
+    np.testing.assert_allclose(b2.lam_high, b1.lam_high[idx], rtol=1e-9)
+
+
+@pytest.mark.parametrize("factor", [1e-3, 7.0, 1e4])
+def test_scaling(factor):
+    system, load = random_problem(6, 5)
+    b = shakedown_bounds(system, load)
+    # K and loads together: slips unchanged, load factors unchanged
+    sK = sd.DiscreteSystem(factor * system.A, factor * system.B, factor * system.C, 0.3)
+    b2 = shakedown_bounds(sK, load.scaled(factor))
+    assert (b2.lam1, b2.lam2) == pytest.approx((b.lam1, b.lam2), rel=1e-9)
+    # K alone: slips scale as 1 / factor, load factors unchanged
+    b3 = shakedown_bounds(sK, load)
+    assert (b3.lam1, b3.lam2) == pytest.approx((b.lam1, b.lam2), rel=1e-9)
+    np.testing.assert_allclose(b3.state_at_lam2, b.state_at_lam2 / factor, rtol=1e-7,
+                               atol=1e-9 * np.abs(b.state_at_lam2).max() / factor)
+    # the periodic part alone: lam scales inversely
+    lo = sd.LoadCycle.from_harmonics(load.q0, load.p0, q_cos=factor * load.q_cos,
+                                     q_sin=factor * load.q_sin, p_cos=factor * load.p_cos)
+    b4 = shakedown_bounds(system, lo)
+    assert (b4.lam1, b4.lam2) == pytest.approx((b.lam1 / factor, b.lam2 / factor), rel=1e-9)
+
+
+def test_time_scaling_samples():
+    """A sampled load and the same load given at twice the samples (midpoints inserted: the
+    same piecewise-linear cycle) have the same bounds; harmonics vs dense samples converge."""
+    system, load = random_problem(5, 6)
+    s1 = load.to_samples(16)
+    q, p = s1.q1, s1.p1
+    q2 = np.empty((32, 5))
+    p2 = np.empty((32, 5))
+    q2[0::2], p2[0::2] = q, p
+    q2[1::2], p2[1::2] = 0.5 * (q + np.roll(q, -1, 0)), 0.5 * (p + np.roll(p, -1, 0))
+    s2 = sd.LoadCycle.from_samples(load.q0, load.p0, q2, p2)
+    b1, b2 = shakedown_bounds(system, s1), shakedown_bounds(system, s2)
+    assert (b2.lam1, b2.lam2) == pytest.approx((b1.lam1, b1.lam2), rel=1e-9)
+    # sampling the harmonic load finely: extremes converge as O(1 / S^2)
+    bh = shakedown_bounds(system, load)
+    bs = shakedown_bounds(system, load.to_samples(4096))
+    assert bs.lam2 == pytest.approx(bh.lam2, rel=1e-5)
+
+
+# ---------------------------------------------------------------------- Melan (B = 0)
+def _uncoupled(n, seed):
+    rng = np.random.default_rng(seed)
+    M = rng.standard_normal((n, n))
+    A = M @ M.T + n * np.eye(n)
+    system = sd.DiscreteSystem(A, np.zeros((n, n)), np.eye(n), rng.uniform(0.1, 1.0, n))
+    load = sd.LoadCycle.from_harmonics(
+        rng.standard_normal(n), 1 + rng.random(n),
+        q_cos=rng.standard_normal(n), q_sin=rng.standard_normal(n),
+        p_cos=0.3 * rng.standard_normal(n),
+    )
+    return system, load
+
+
+def test_melan_uncoupled_property():
+    hyp = pytest.importorskip("hypothesis")
+    st = hyp.strategies
+
+    @hyp.settings(max_examples=25, deadline=None)
+    @hyp.given(st.integers(1, 30), st.integers(0, 2**31 - 1))
+    def prop(n, seed):
+        system, load = _uncoupled(n, seed)
+        b = shakedown_bounds(system, load, adjacency=False, separation=False)
+        if b.status == "bounded":
+            assert b.lam1 == pytest.approx(b.lam2, rel=1e-9)
+            check_certificate(b)
+        else:
+            assert b.status == "infeasible"  # the static load alone is outside the cone
+
+    prop()
+
+
+# ---------------------------------------------------------------------- extremes
+def test_single_node_closed_form():
+    a, bb, f, p0, q0, Q = 2.0, 0.5, 0.4, 3.0, 0.2, 1.3
+    s = sd.DiscreteSystem([[a]], [[bb]], [[1.0]], friction=f)
+    load = sd.LoadCycle.from_harmonics([q0], [p0], q_cos=[Q])
+    b = shakedown_bounds(s, load)
+    # (f p0 - q0 - lam Q)/(a - f b) = (-f p0 - q0 + lam Q)/(a + f b)
+    lam = ((f * p0 - q0) * (a + f * bb) + (f * p0 + q0) * (a - f * bb)) / (
+        Q * (a + f * bb) + Q * (a - f * bb))
+    assert b.lam2 == pytest.approx(lam, rel=1e-12)
+    assert b.lam1 == b.lam2
+
+
+def test_no_periodic_part():
+    system, _ = random_problem(4, 7)
+    load = sd.LoadCycle.static(np.zeros(4), np.ones(4))
+    b = shakedown_bounds(system, load)
+    assert np.isinf(b.lam2) and b.status == "unbounded_no_periodic_part"
+    assert "no periodic part" in b.message
+
+
+def test_static_gross_slip_is_infeasible():
+    # a tensile static normal load: I_0 and II_0 are inconsistent for every lam >= 0
+    s = sd.DiscreteSystem([[1.0]], [[0.0]], [[1.0]], friction=0.1)
+    load = sd.LoadCycle.from_harmonics([0.0], [-1.0], q_cos=[1.0])
+    b = shakedown_bounds(s, load)
+    assert b.status == "infeasible" and np.isnan(b.lam2)
+
+
+@pytest.mark.parametrize("friction", [1e-6, 50.0])
+def test_friction_extremes(friction):
+    system, load = random_problem(5, 8, friction=friction, coupling=0.3 / max(1, friction))
+    a = shakedown_bounds(system, load)
+    h = shakedown_bounds(system, load, solver="highs")
+    assert a.lam2 == pytest.approx(h.lam2, rel=1e-6)
+    assert a.lam1 == pytest.approx(h.lam1, rel=1e-6)
+    assert a.lam1 <= a.lam2 * (1 + 1e-12)
+
+
+def test_ill_conditioned_K():
+    rng = np.random.default_rng(9)
+    n = 6
+    Q, _ = np.linalg.qr(rng.standard_normal((2 * n, 2 * n)))
+    K = Q @ np.diag(np.logspace(0, 10, 2 * n)) @ Q.T
+    K = 0.5 * (K + K.T)
+    system = sd.DiscreteSystem(K[:n, :n], K[:n, n:], K[n:, n:], 0.05)
+    assert system.condition_number == pytest.approx(1e10, rel=1e-2)
+    load = sd.LoadCycle.from_harmonics(np.zeros(n), 1e5 * np.ones(n),
+                                       q_cos=1e5 * rng.standard_normal(n))
+    a = shakedown_bounds(system, load, adjacency=False)
+    h = shakedown_bounds(system, load, adjacency=False, solver="highs")
+    assert a.lam2 == pytest.approx(h.lam2, rel=1e-6)
+    check_certificate(a)
+
+
+@pytest.mark.slow
+def test_n2000_finishes():
+    system, load = random_problem(2000, 0)
+    b = shakedown_bounds(system, load, adjacency=False, separation=False)
+    assert b.status == "bounded" and 0 < b.lam1 <= b.lam2
+    assert max(b.residuals.values()) <= 1e-7
+
+
+# ---------------------------------------------------------------------- bad input
+def test_bad_input_messages():
+    system, load = random_problem(3, 0)
+    with pytest.raises(sd.InputError, match="system must be a shakedown.DiscreteSystem"):
+        shakedown_bounds(np.eye(3), load)
+    with pytest.raises(sd.InputError, match="load must be a shakedown.LoadCycle"):
+        shakedown_bounds(system, "load")
+    other = sd.LoadCycle.from_harmonics(np.zeros(2), np.ones(2), q_cos=np.ones(2))
+    with pytest.raises(sd.ShapeError, match="load has 2 nodes but system has 3"):
+        shakedown_bounds(system, other)
+    for bad in (-1.0, np.nan, np.inf):
+        with pytest.raises(sd.InputError, match="lam must be finite and >= 0"):
+            shakedown_bounds(system, load, lam=bad)
+    with pytest.raises(sd.InputError, match="lam must be a number"):
+        safe_region(system, load, "x")
+    with pytest.raises(sd.InputError, match="solver must be 'auto' or 'highs'"):
+        shakedown_bounds(system, load, solver="glpk")
