@@ -34,8 +34,6 @@ from .errors import InputError, ShapeError
 __all__ = [
     "SteadyCycle",
     "steady_cycle",
-    "UniquenessStudy",
-    "uniqueness_study",
     "natural_slip_scale",
     "sample_initial_slips",
 ]
@@ -434,5 +432,10 @@ def _anderson(X, G, y):
     return y - (dX + dG) @ gamma
 
 
-# the uniqueness study lives in its own module; re-exported for ``shakedown.steady`` users
-from .uniqueness import UniquenessStudy, uniqueness_study  # noqa: E402
+def __getattr__(name):
+    # the uniqueness study lives in shakedown.uniqueness; re-exported lazily (no import cycle)
+    if name in ("UniquenessStudy", "uniqueness_study"):
+        from . import uniqueness
+
+        return getattr(uniqueness, name)
+    raise AttributeError(f"module 'shakedown.steady' has no attribute {name!r}")
