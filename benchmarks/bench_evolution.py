@@ -10,14 +10,25 @@ Usage::
 (b) cost per step against N: the warm-started active-set solver over a steady period vs the same
     steps solved one by one from scratch by textbook Lemke (``shakedown.lemke.lemke``, dense
     tableau, lexicographic) on the LCP of MODEL.md s.4 in ``(w, dv+, dv-)``, side by side;
-(c) peak memory of an N = 2000 run (tracemalloc and ru_maxrss).
+(c) peak memory of an N = 2000 run (tracemalloc and ru_maxrss);
+(s) Siconos numerics (Debian ``python3-siconos``) as a second from-scratch baseline: the LCPs of
+    one steady period (200 steps) are written to an ``.npz``, solved by
+    ``benchmarks/siconos_lcp_worker.py`` under ``/usr/bin/python3`` (the only interpreter that
+    imports Siconos) with ``SICONOS_LCP_LEMKE`` (+ ``PIVOT``, ``NEWTON_FB``; ``ENUM`` for N = 5),
+    and compared with the warm-started solver and textbook Lemke of the same run.  Skipped, with
+    a message, when ``/usr/bin/python3 -c "import siconos.numerics"`` fails.
+
+``--parts`` selects the parts (default ``abcs``).
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import platform
 import resource
+import subprocess
+import tempfile
 import time
 import tracemalloc
 from pathlib import Path
@@ -67,6 +78,131 @@ def lemke_step(s, M, v_prev, q_w, p_w):
     p0 = p_w + s.B.T @ v_prev
     res = lemke(M, np.concatenate([p0, f * p0 + q0, f * p0 - q0]))
     return res, v_prev + res.z[n:2 * n] - res.z[2 * n:]
+
+
+SICONOS_PYTHON = "/usr/bin/python3"
+SICONOS_WORKER = Path(__file__).resolve().parent / "siconos_lcp_worker.py"
+
+
+def siconos_available(python=SICONOS_PYTHON):
+    """Whether ``python -c "import siconos.numerics"`` succeeds (False if there is no python)."""
+    try:
+        r = subprocess.run([python, "-c", "import siconos.numerics"], capture_output=True,
+                           timeout=120)
+    except (OSError, subprocess.TimeoutExpired):
+        return False
+    return r.returncode == 0
+
+
+def step_lcps(s, starts, qw, pw):
+    """The LCPs of the steps in ``(w, dv+, dv-)`` (MODEL.md s.4, as :func:`lemke_step`).
+
+    Returns ``M`` (3N, 3N) (the same for every step) and ``Q`` (k, 3N), rows
+    ``(p0, f p0 + q0, f p0 - q0)`` with ``q0 = q_w + A v_prev``, ``p0 = p_w + B^T v_prev``.
+    """
+    f = s.friction
+    q0 = qw + starts @ s.A.T
+    p0 = pw + starts @ s.B
+    return lcp_matrix(s), np.hstack([p0, f * p0 + q0, f * p0 - q0])
+
+
+def run_siconos(M, Q, solvers=("lemke",), python=SICONOS_PYTHON, workdir=None, tol=1e-12):
+    """Solve ``LCP(M, Q[i])`` for every ``i`` with Siconos in a ``python`` subprocess.
+
+    Returns the worker's output as a dict (see ``siconos_lcp_worker.py``).
+    """
+    with tempfile.TemporaryDirectory(dir=workdir) as tmp:
+        fin, fout = Path(tmp) / "lcps.npz", Path(tmp) / "solutions.npz"
+        np.savez(fin, M=M, Q=Q)
+        env = dict(os.environ, PYTHONPATH="", PYTHONNOUSERSITE="1")
+        subprocess.run([python, str(SICONOS_WORKER), str(fin), str(fout),
+                        "--solvers", ",".join(solvers), "--tol", repr(tol)],
+                       check=True, env=env)
+        with np.load(fout) as data:
+            return {k: data[k] for k in data.files}
+
+
+def lcp_to_step(s, z, starts, qw, pw):
+    """Slips, gaps and reactions ``(v, w, q, p)`` (each (k, N)) from LCP answers ``z`` (k, 3N)."""
+    n = s.n_nodes
+    w, dv = z[:, :n], z[:, n:2 * n] - z[:, 2 * n:]
+    v = starts + dv
+    q = qw + v @ s.A.T + w @ s.B.T
+    p = pw + v @ s.B + w @ s.C.T
+    return v, w, q, p
+
+
+def part_siconos(sizes, steps, lemke_steps, lemke_all_max_n=100, enum_max_n=5, out=None):
+    """Siconos LCP solvers vs the warm-started solver and textbook Lemke (see module doc)."""
+    if not siconos_available():
+        print(f"Siconos is unavailable ({SICONOS_PYTHON} -c 'import siconos.numerics' failed): "
+              "part s skipped", flush=True)
+        return []
+    rows = []
+    for n in sizes:
+        s, load = coupled_system(n, seed=100 + n)
+        solver = StepSolver(s)
+        run = sd.solve_cycles(s, load, 1.0, steps_per_cycle=steps, max_cycles=100, solver=solver)
+        v = run.final_slip.copy()
+        guess = run.final_active_sets[-1]
+        tk = np.arange(1, steps + 1) / steps
+        qw, pw = load.evaluate(tk, 1.0)
+        warm_t, starts, ans = [], [], []
+        for k in range(steps):
+            t1 = time.perf_counter()
+            r = solver.solve(v, qw[k], pw[k], guess)
+            warm_t.append(time.perf_counter() - t1)
+            starts.append(v)
+            ans.append((r.slip, r.gap, r.q, r.p, r.force_scale))
+            v, guess = r.slip, r.active_set
+        starts = np.array(starts)
+        v_w, g_w, q_w, p_w, fs = (np.array(x) for x in zip(*ans, strict=True))
+        M, Q = step_lcps(s, starts, qw, pw)
+        # textbook Lemke (shakedown.lemke) on (a subset of) the same LCPs, same process
+        n_lemke = steps if n <= lemke_all_max_n else min(lemke_steps, steps)
+        idx = np.linspace(0, steps - 1, n_lemke).astype(int)
+        lt, lz, lok = [], [], []
+        for k in idx:
+            t1 = time.perf_counter()
+            res = lemke(M, Q[k])
+            lt.append(time.perf_counter() - t1)
+            lz.append(res.z)
+            lok.append(res.success)
+        solvers = ["lemke", "pivot", "newton_fb"] + (["enum"] if n <= enum_max_n else [])
+        t0 = time.perf_counter()
+        sic = run_siconos(M, Q, solvers, workdir=out)
+        t_sic = time.perf_counter() - t0
+        warm_med = float(np.median(warm_t))
+        row = dict(N=n, steps=steps, mean_active=float(np.mean(
+            [np.count_nonzero(a) for a in run.final_active_sets])),
+            warm_median_ms=warm_med * 1e3, textbook_median_ms=float(np.median(lt)) * 1e3,
+            textbook_steps=len(idx), textbook_fail=int(np.sum(~np.array(lok))),
+            siconos_subprocess_s=t_sic)
+        vt, gt, qt, pt = lcp_to_step(s, np.array(lz), starts[idx], qw[idx], pw[idx])
+        ok = np.array(lok)
+        row["textbook_max_dslip"] = float(np.abs(vt - v_w[idx])[ok].max(initial=0))
+        for name in solvers:
+            z = sic[f"{name}_z"]
+            good = sic[f"{name}_info"] == 0
+            vs, gs, qs, ps = lcp_to_step(s, z, starts, qw, pw)
+            dslip = np.abs(vs - v_w)[good].max(initial=0)
+            dgap = np.abs(gs - g_w)[good].max(initial=0)
+            dreac = np.maximum(np.abs(qs - q_w), np.abs(ps - p_w))[good].max(initial=0)
+            med = float(np.median(sic[f"{name}_time"]))
+            row.update({f"{name}_median_ms": med * 1e3,
+                        f"{name}_build_ms": float(np.median(sic[f"{name}_build"])) * 1e3,
+                        f"{name}_iter": float(np.median(sic[f"{name}_iter"])),
+                        f"{name}_fail": int(np.sum(~good)),
+                        f"{name}_max_dslip": float(dslip), f"{name}_max_dgap": float(dgap),
+                        f"{name}_max_dreaction": float(dreac),
+                        f"{name}_over_warm": med / warm_med})
+        row["textbook_over_siconos_lemke"] = float(np.median(lt)) / (
+            row["lemke_median_ms"] / 1e3)
+        row["force_scale"] = float(np.median(fs))
+        rows.append(row)
+        print({k: (f"{v:.4g}" if isinstance(v, float) else v) for k, v in row.items()},
+              flush=True)
+    return rows
 
 
 def part_a(sizes, steps_list, out):
@@ -191,7 +327,7 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--out", default=str(Path(__file__).parent))
-    ap.add_argument("--parts", default="abc")
+    ap.add_argument("--parts", default="abcs")
     args = ap.parse_args()
     out = Path(args.out)
     print(f"machine: {platform.processor() or platform.machine()}, "
@@ -204,6 +340,9 @@ def main():
                lemke_max_n=300, n_lemke_steps=20 if args.quick else 40)
     if "c" in args.parts:
         part_c(300 if args.quick else 2000)
+    if "s" in args.parts:
+        part_siconos([5, 10] if args.quick else [5, 10, 100, 300], 200,
+                     lemke_steps=40)
 
 
 if __name__ == "__main__":

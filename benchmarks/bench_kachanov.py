@@ -2,9 +2,10 @@
 
 Usage::
 
-    python benchmarks/bench_kachanov.py            # everything (about 3 minutes on 2 cores)
+    python benchmarks/bench_kachanov.py            # everything (about 6 minutes on 2 cores)
     python benchmarks/bench_kachanov.py --quick    # smaller sizes
     python benchmarks/bench_kachanov.py --write-reference   # also data/reference CSV
+    python benchmarks/bench_kachanov.py --only wstar       # section 5 alone (about 3 minutes)
 
 Sections
 --------
@@ -15,6 +16,11 @@ Sections
    and the BEM (n_modes 4, 8, 16, 32) against the exact elliptic-integral solution.
 3. Kachanov vs BEM on the same random sets (N = 100): time, relative error of the interaction
    (off-diagonal K) and of lam1, lam2 (shakedown.shakedown_bounds) against the BEM with 24 modes.
+4. Smallest eigenvalue of Kachanov's symmetrised K.
+5. Steady dissipation W* (``shakedown.solve_cycles``, implicit, 64 steps per period, from the
+   zero initial state) of Kachanov and of the 8/16-mode BEM against the 24-mode BEM on the sets
+   of section 3, at 1.2, 1.5 and 2 times the reference lam2, with the time (model build + bounds
+   + cycles) of each model.
 """
 
 from __future__ import annotations
@@ -196,6 +202,97 @@ def section_network(n, densities, seeds, lines):
     lines.append("")
 
 
+WSTAR_FACTORS = (1.2, 1.5, 2.0)
+
+
+def _wstar_runs(build, lams, steps, max_cycles):
+    """Build a model, its bounds and steady W* at each load factor, timing each part."""
+    t0 = time.perf_counter()
+    m = build()
+    system = m.system
+    load = m.load_cycle()
+    t1 = time.perf_counter()
+    b = sd.shakedown_bounds(system, load, adjacency=False)
+    t2 = time.perf_counter()
+    runs = []
+    for lam in lams:
+        t = time.perf_counter()
+        r = sd.solve_cycles(system, load, lam, method="implicit", steps_per_cycle=steps,
+                            max_cycles=max_cycles)
+        runs.append((float(m.normalised_dissipation(r.steady_dissipation)), r.status,
+                     r.n_cycles, time.perf_counter() - t))
+    return dict(t_build=t1 - t0, t_bounds=t2 - t1, t_cycles=sum(x[3] for x in runs), bounds=b,
+                runs=runs)
+
+
+def section_wstar(n, densities, seeds, lines, steps=64, max_cycles=200):
+    lines.append(f"## 5. Steady dissipation W*: Kachanov and BEM 8/16 vs BEM 24 (N = {n})\n")
+    lines.append(
+        "Same crack sets as section 3 (min_spacing 0.1, f = 0.6, seed 002 s.4.1 load: static "
+        "(-1, 0, -1), cyclic (0, 1, 0) p0 = 1). `shakedown.solve_cycles(system, load, lam, "
+        f"method='implicit', steps_per_cycle={steps}, max_cycles={max_cycles})` from the zero "
+        "initial state, at the *same* load factors for every model: lam = c lam2_ref, c = "
+        f"{', '.join(f'{c:g}' for c in WSTAR_FACTORS)}, lam2_ref = lam2 of the 24-mode BEM. "
+        "W* = W mu / (4 (1 - nu) p0^2 abar^2) (MODEL.md s.7, `.normalised_dissipation`). "
+        "`err` = |W*/W*_ref - 1|. Times (single runs): `build` = model + DiscreteSystem, "
+        "`bounds` = shakedown_bounds, `cycles` = the three solve_cycles runs, `total` = the sum. "
+        "The time discretisation (64 steps) is the same for every model, so the errors are "
+        "model errors only.\n"
+    )
+    hdr = " | ".join(f"W* ({c:g} lam2) | err" for c in WSTAR_FACTORS)
+    lines.append(f"| density | seed | model | {hdr} | build [s] | bounds [s] | cycles [s] | "
+                 "total [s] | periods to steady |")
+    lines.append("|---|---|---|" + "---|---|" * len(WSTAR_FACTORS) + "---|---|---|---|---|")
+    summary = {}
+    for rho in densities:
+        for seed in seeds:
+            cs = cn.sample_crack_set(n, density=rho, rng=seed)
+            ref_build = lambda cs=cs: cn.bem_model(cs, n_modes=24)  # noqa: E731
+            # reference bounds first (the load factors depend on them), then its runs
+            t0 = time.perf_counter()
+            ref_model = ref_build()
+            ref_model.system  # noqa: B018
+            t_ref_build = time.perf_counter() - t0
+            lam2 = sd.shakedown_bounds(ref_model.system, ref_model.load_cycle(),
+                                       adjacency=False).lam2
+            lams = [c * lam2 for c in WSTAR_FACTORS]
+            ref = _wstar_runs(lambda m=ref_model: m, lams, steps, max_cycles)
+            ref["t_build"] = t_ref_build
+            wref = [x[0] for x in ref["runs"]]
+            models = [
+                ("Kachanov uniform", lambda cs=cs: cn.kachanov_model(cs)),
+                ("Kachanov elliptic", lambda cs=cs: cn.kachanov_model(cs, weighting="elliptic")),
+                ("BEM 8", lambda cs=cs: cn.bem_model(cs, n_modes=8)),
+                ("BEM 16", lambda cs=cs: cn.bem_model(cs, n_modes=16)),
+            ]
+            results = [(name, _wstar_runs(build, lams, steps, max_cycles))
+                       for name, build in models]
+            results.append(("BEM 24 (reference)", ref))
+            for name, r in results:
+                cells = []
+                for (w, status, _, _), w0 in zip(r["runs"], wref, strict=True):
+                    err = abs(w / w0 - 1)
+                    flag = "" if status == "periodic" else f" ({status})"
+                    cells.append(f"{w:.6g}{flag} | " + ("0" if "reference" in name
+                                                             else f"{err:.2e}"))
+                    summary.setdefault(name, []).append(err)
+                total = r["t_build"] + r["t_bounds"] + r["t_cycles"]
+                periods = "/".join(str(x[2]) for x in r["runs"])
+                lines.append(f"| {rho} | {seed} | {name} | {' | '.join(cells)} | "
+                             f"{r['t_build']:.3g} | {r['t_bounds']:.3g} | {r['t_cycles']:.3g} | "
+                             f"{total:.3g} | {periods} |")
+                print(lines[-1], flush=True)
+    lines.append("")
+    lines.append("Max / median relative error of W* over all sets and load factors:\n")
+    lines.append("| model | max err | median err |")
+    lines.append("|---|---|---|")
+    for name, errs in summary.items():
+        if "reference" in name:
+            continue
+        lines.append(f"| {name} | {max(errs):.2e} | {float(np.median(errs)):.2e} |")
+    lines.append("")
+
+
 def section_spd(lines):
     lines.append("## 4. Smallest eigenvalue of Kachanov's symmetrised K\n")
     lines.append("N = 200, half-length uniform in [0.05, 1], min_spacing 0 (the hardest case).\n")
@@ -217,20 +314,31 @@ def main():
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--write-reference", action="store_true")
     ap.add_argument("--output", default=None, help="write the markdown tables here")
+    ap.add_argument("--only", default=None,
+                    choices=("assembly", "collinear", "network", "spd", "wstar"),
+                    help="run one section only (wstar = section 5, W* vs the BEM)")
     args = ap.parse_args()
+
+    def want(name):
+        return args.only is None or args.only == name
+
     lines = [
         f"Machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
         f"Python {platform.python_version()}, numpy {np.__version__}.\n"
     ]
     sizes = (100, 300) if args.quick else (100, 1000, 5000)
-    section_assembly(sizes, lines)
+    if want("assembly"):
+        section_assembly(sizes, lines)
     gaps = (2.0, 1.0, 0.5, 0.2, 0.1, 0.05)
-    section_collinear(gaps, lines, args.write_reference)
-    if args.quick:
-        section_network(40, (0.1,), (1,), lines)
-    else:
-        section_network(100, (0.05, 0.1, 0.2), (1, 2), lines)
-    section_spd(lines)
+    if want("collinear"):
+        section_collinear(gaps, lines, args.write_reference)
+    n_net, dens, seeds = (40, (0.1,), (1,)) if args.quick else (100, (0.05, 0.1, 0.2), (1, 2))
+    if want("network"):
+        section_network(n_net, dens, seeds, lines)
+    if want("spd"):
+        section_spd(lines)
+    if want("wstar"):
+        section_wstar(n_net, dens, seeds, lines)
     text = "\n".join(lines)
     if args.output:
         Path(args.output).write_text(text, encoding="utf-8")
