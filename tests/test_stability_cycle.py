@@ -114,18 +114,10 @@ def test_with_solve_cycles_if_available():
 
 
 # ----------------------------------------------------------------------------- CLI analysis
-class _Out:
-    def __init__(self, path):
-        self.path = path
+def _Out(path):
+    from shakedown.output import OutputFolder
 
-    def write_json(self, name, obj):
-        (self.path / f"{name}.json").write_text(json.dumps(obj, default=str))
-
-    def write_table(self, name, df):
-        df.to_csv(self.path / f"{name}.csv", index=False)
-
-    def save_figure(self, name, fig):
-        fig.savefig(self.path / f"{name}.png")
+    return OutputFolder(path)  # the real output folder: names are used as given
 
 
 def _ctx(tmp_path, system, model=None, load=None):
