@@ -166,6 +166,64 @@ def identify_basis(A, z, s, n):
     return T
 
 
+def complete_basis(A, z, s, e, n, max_missing=None):
+    """A dual-feasible basis at a degenerate interior-point optimum.
+
+    The strongly active rows ``C`` (the ``z / s`` values above the largest gap in their sorted
+    sequence) carry the multipliers; when ``|C| < n`` the basis must be completed with
+    ``k = n - |C|`` more rows whose multipliers are non-negative.  With ``Q`` an orthonormal
+    basis of ``null(A_C)``, the completion multipliers ``y`` satisfy ``Q^T A_R^T y = Q^T e``:
+    a ``k``-row LP ``min 1.y`` with ``y >= 0`` whose basic solution picks at most ``k`` rows
+    (padded by the rows of smallest slack that keep the basis non-singular).  Returns the
+    sorted basis, or ``None`` when no such completion is found.
+    """
+    from scipy.optimize import linprog
+
+    r = z / np.maximum(s, 1e-300)
+    order = np.argsort(-r)
+    top = np.maximum(r[order[: n + 1]], 1e-300)
+    lo = 1 if max_missing is None else max(1, n - max_missing)
+    gaps = np.log(top[lo - 1 : n]) - np.log(top[lo : n + 1])
+    m = lo + int(np.argmax(gaps))  # |C|: the cut with the largest relative drop
+    C = np.sort(order[:m])
+    k = n - m
+    if k <= 0:
+        return None
+    Qf, _ = np.linalg.qr(A[C].T, mode="complete")
+    Q = Qf[:, m:]
+    if np.linalg.matrix_rank(A[C]) < m:
+        return None
+    rest = np.setdiff1d(np.arange(A.shape[0]), C)
+    P = A[rest] @ Q  # projections of the candidate rows, (R - m, k)
+    target = Q.T @ e
+    # e in span(A_C) up to the interior point's accuracy: the completion rows carry (near) zero
+    # multipliers; pick the k best-conditioned ones (column-pivoted QR of the projections)
+    if np.abs(target).max() <= 1e-6 * (1.0 + np.abs(e).max()):
+        _, _, piv = sla.qr(P.T, mode="economic", pivoting=True)
+        chosen = rest[piv[:k]]
+    else:
+        res = linprog(np.ones(len(rest)), A_eq=P.T, b_eq=target, bounds=(0, None),
+                      method="highs")
+        if res.status != 0:
+            return None
+        nz = np.flatnonzero(res.x > 1e-12 * max(1.0, res.x.max()))
+        chosen = rest[nz]
+        if len(chosen) < k:  # pad with the best-conditioned remaining projections
+            others = np.setdiff1d(np.arange(len(rest)), nz)
+            _, _, piv = sla.qr(P[others].T, mode="economic", pivoting=True)
+            picked = list(nz)
+            for j in others[piv]:
+                if len(picked) == k:
+                    break
+                if np.linalg.matrix_rank(P[picked + [j]]) == len(picked) + 1:
+                    picked.append(int(j))
+            chosen = rest[np.asarray(picked, dtype=int)]
+    T = np.r_[C, chosen].astype(int)
+    if len(np.unique(T)) != n:
+        return None
+    return np.sort(np.asarray(T, dtype=int))
+
+
 # ---------------------------------------------------------------------- dual simplex
 class Tableau:
     """The shared data of a family of LPs: rows ``A`` (unit-norm), ``b``, start basis ``T0``.
@@ -407,9 +465,19 @@ def solve_max(A, b, e, *, max_iter=60):
     if not conv:
         return None, None
     T = identify_basis(As, z, s, n)
-    if T is None:
-        return None, None
-    tab = Tableau(A, b, e, T)
+    tab = Tableau(A, b, e, T) if T is not None else None
+    if tab is None or tab.singular or not tab.dual_feasible:
+        # degenerate optimum (fewer than n strongly active rows): complete the active set so
+        # that the multipliers stay non-negative, then let the dual simplex finish
+        T = complete_basis(As, z, s, e, n)
+        if T is None:
+            return None, None
+        tab = Tableau(A, b, e, T)
+        ymax = max(1.0, float(np.abs(tab.y0).max()))
+        if not tab.singular and tab.y0.min() >= -1e-6 * ymax:
+            # multipliers that are zero up to the interior point's accuracy; the final
+            # answer is certified again below, so this cannot pass a wrong optimum
+            tab.y0 = np.maximum(tab.y0, 0.0)
     if tab.singular or not tab.dual_feasible:
         return None, None
     ans = batch_dual_simplex(tab, [()])[0]

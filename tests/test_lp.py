@@ -76,3 +76,27 @@ def test_unbounded_lp_returns_none():
     A = np.array([[-1.0]])
     ans, tab = dense_lp.solve_max(A, np.array([0.0]), np.array([1.0]))
     assert ans is None and tab is None
+
+
+@pytest.mark.parametrize("n", [5, 40])
+def test_degenerate_optimum_is_completed_not_abandoned(n):
+    """Uncoupled lam2 LP: at the optimum one node's two parallel constraints meet and the optimal
+    face has dimension N - 1, so far fewer than N + 1 rows are strongly active.  The interior
+    point's basis must be completed (dual-feasible) instead of falling back to HiGHS."""
+    import shakedown as sd
+    from shakedown.bounds import extreme_constraints
+
+    rng = np.random.default_rng(n)
+    M = rng.standard_normal((n, n))
+    system = sd.DiscreteSystem(M @ M.T + n * np.eye(n), np.zeros((n, n)), np.eye(n), 0.4)
+    load = sd.LoadCycle.from_harmonics(0.1 * rng.standard_normal(n), 1 + rng.random(n),
+                                       q_cos=rng.standard_normal(n))
+    cs = extreme_constraints(system, load)
+    A = np.vstack([np.hstack([cs.G, -cs.m[:, None]]), np.r_[np.zeros(n), -1.0][None, :]])
+    b = np.r_[cs.c, 0.0]
+    e = np.r_[np.zeros(n), 1.0]
+    ans, _ = dense_lp.solve_max(A, b, e)
+    assert ans is not None and ans.status == "optimal"
+    assert ans.x[-1] == pytest.approx(highs_max(A, b, e), rel=1e-7)
+    # certificate: y >= 0 and A^T y = e (the interior point's accuracy, 1e-8 relative)
+    assert np.all(ans.y >= 0) and np.allclose(A.T @ ans.y, e, atol=1e-7)
