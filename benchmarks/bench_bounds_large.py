@@ -5,10 +5,15 @@ Run from the repository root:  OPENBLAS_NUM_THREADS=1 python benchmarks/bench_bo
 alone needs more than 10 minutes at N = 2000 and cvxpy days, see RESULTS_bounds.md).
 """
 
-import sys, time, resource
+import resource
+import sys
+import time
+
 sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
 from bench_bounds import random_problem
+
 import shakedown as sd
+
 for n in (1000, 2000):
     s, L = random_problem(n)
     t = time.perf_counter()
