@@ -18,5 +18,6 @@ for n in (1000, 2000):
     s, L = random_problem(n)
     t = time.perf_counter()
     b = sd.shakedown_bounds(s, L, adjacency=False, separation=False)
-    print(n, "lam1+lam2", time.perf_counter() - t, b.lam1, b.lam2, b.n_lps, b.simplex_iterations, max(b.residuals.values()), flush=True)
+    print(n, "lam1+lam2", time.perf_counter() - t, b.lam1, b.lam2, b.n_lps, b.simplex_iterations,
+          max(b.residuals.values()), flush=True)
     print("peak RSS MB", resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, flush=True)
