@@ -536,6 +536,22 @@ def _lam1(cs, lam_low, lam_high, lam2, messages):
     return lam1, limiting
 
 
+def _separation_outcome(ans: LPAnswer, lam2: float, n: int, messages: list):
+    """``(lam_separation, separation_nodes)`` from the no-separation LP; appends the message."""
+    lam_sep = _value(ans)
+    sep_nodes = ()
+    if ans.status == "optimal" and (not np.isfinite(lam2) or lam_sep < lam2 - 1e-9 * max(1, lam2)):
+        duals = ans.row_dual[2 * n :]
+        sep_nodes = tuple(int(j) for j in np.flatnonzero(np.abs(duals) > 1e-12))
+        messages.append(
+            f"above lam = {lam_sep:.6g} every safe state needs a tensile normal reaction "
+            f"at node(s) {list(sep_nodes)}"
+        )
+    elif np.isnan(lam_sep):
+        messages.append("no safe state keeps every node in compression, even at lam = 0")
+    return lam_sep, sep_nodes
+
+
 def _solve_dense(cs, load, intervals, adjacency, separation):
     """Dense path (``solver="auto"``); ``None`` when the ``lam2`` LP is not a certified optimum
     (unbounded, infeasible or degenerate trouble): the caller then uses :func:`_solve_highs`.
@@ -645,16 +661,7 @@ def _solve_dense(cs, load, intervals, adjacency, separation):
             ans = eng[0].run("max", separation=True)
             stats["lps"] += 1
             stats["iters"] += ans.iterations
-            lam_sep = _value(ans)
-            if ans.status == "optimal" and lam_sep < lam2 - 1e-9 * max(1, lam2):
-                duals = ans.row_dual[2 * n :]
-                sep_nodes = tuple(int(j) for j in np.flatnonzero(np.abs(duals) > 1e-12))
-                messages.append(
-                    f"above lam = {lam_sep:.6g} every safe state needs a tensile normal reaction "
-                    f"at node(s) {list(sep_nodes)}"
-                )
-            elif np.isnan(lam_sep):
-                messages.append("no safe state keeps every node in compression, even at lam = 0")
+            lam_sep, sep_nodes = _separation_outcome(ans, lam2, n, messages)
     return (lam1, lam2, "bounded", messages, lam_adj, adj_node, limiting, lam_low, lam_high,
             lam_sep, sep_nodes, v_at_lam2, certificate, worst, stats["lps"], stats["iters"])
 
@@ -728,16 +735,7 @@ def _solve_highs(cs, load, intervals, adjacency, separation):
     lam_sep, sep_nodes = (np.nan, ())
     if separation and status != "infeasible":
         ans = eng.run("max", separation=True)
-        lam_sep = _value(ans)
-        if ans.status == "optimal" and (not np.isfinite(lam2) or lam_sep < lam2 - 1e-9 * max(1, lam2)):
-            duals = ans.row_dual[2 * n :]
-            sep_nodes = tuple(int(j) for j in np.flatnonzero(np.abs(duals) > 1e-12))
-            messages.append(
-                f"above lam = {lam_sep:.6g} every safe state needs a tensile normal reaction "
-                f"at node(s) {list(sep_nodes)}"
-            )
-        elif np.isnan(lam_sep):
-            messages.append("no safe state keeps every node in compression, even at lam = 0")
+        lam_sep, sep_nodes = _separation_outcome(ans, lam2, n, messages)
 
     return (lam1, lam2, status, messages, lam_adj, adj_node, limiting, lam_low, lam_high,
             lam_sep, sep_nodes, v_at_lam2, certificate, dict(eng.worst), eng.lp.n_solves,
