@@ -297,3 +297,28 @@ def test_bad_input_messages():
         safe_region(system, load, "x")
     with pytest.raises(sd.InputError, match="solver must be 'auto' or 'highs'"):
         shakedown_bounds(system, load, solver="glpk")
+
+
+@pytest.mark.parametrize("solver", ["auto", "highs"])
+def test_no_separation_limit_at_a_frictionless_node(solver):
+    """With f > 0 the friction constraints imply p >= 0 inside H; a frictionless node can need
+    tension.  Node 0 (f = 0) pins the state to the line A_0 v = -q0_0; its normal reaction
+    p_0(t) = 0.3 + lam cos(2 pi t) + (B^T v)_0.  Independent check: scan the safe segment on that
+    line just below and above the reported limit."""
+    A = np.array([[2.0, 0.5], [0.5, 2.0]])
+    B = np.array([[0.0, 0.3], [0.8, 0.0]])
+    system = sd.DiscreteSystem(A, B, 3 * np.eye(2), [0.0, 0.5])
+    load = sd.LoadCycle.from_harmonics([0.2, 0.0], [0.3, 2.0], q_cos=[0.0, 1.0], p_cos=[1.0, 0.0])
+    b = sd.shakedown_bounds(system, load, solver=solver)
+    assert b.lam_separation < b.lam2 and b.separation_nodes == (0,)
+    assert "tensile" in b.message
+    a0 = A[0]
+    d, v0 = np.array([-a0[1], a0[0]]), -0.2 * a0 / (a0 @ a0)
+    V = v0 + np.linspace(-5, 5, 200001)[:, None] * d
+    best = []
+    for lam in (0.99 * b.lam_separation, 1.01 * b.lam_separation):
+        region = sd.safe_region(system, load, lam)
+        safe = np.all(V @ region.normals.T <= region.offsets + 1e-12, axis=1)
+        assert safe.any()
+        best.append(np.max(0.3 - lam + (V[safe] @ B)[:, 0]))  # best min_t p_0 over safe states
+    assert best[0] > 0 > best[1]
