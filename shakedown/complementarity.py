@@ -44,6 +44,7 @@ from scipy.linalg.lapack import dgecon
 from .errors import InputError, ShapeError
 from .lemke import lemke
 from .system import DiscreteSystem
+from .validation import check_node_vector
 
 STICK, FORWARD, BACKWARD, SEPARATED = 0, 1, 2, 3
 #: Names of the node states, indexed by their codes (also the ``state`` column of tables).
@@ -782,18 +783,7 @@ def get_solver(system: DiscreteSystem, **options) -> StepSolver:
 
 
 def _vec(name, value, n, *, nonneg=False):
-    try:
-        x = np.array(value, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"{name} must be a real array of shape ({n},); got {value!r}") from exc
-    if x.shape != (n,):
-        raise ShapeError(f"{name} must have shape ({n},) (one value per node); got {x.shape}")
-    if not np.all(np.isfinite(x)):
-        raise InputError(f"{name} must be finite; got {x[~np.isfinite(x)][0]}")
-    if nonneg and np.any(x < 0):
-        j = int(np.argmax(x < 0))
-        raise InputError(f"{name} must be >= 0 (nodes cannot penetrate); node {j} has {x[j]}")
-    return x
+    return check_node_vector(name, value, n, nonneg=nonneg)
 
 
 def parse_states(guess, n: int) -> np.ndarray:

@@ -26,10 +26,11 @@ from .complementarity import (
     StepSolver,
     _vec,
 )
-from .errors import InputError, ShapeError
+from .errors import InputError
 from .events import CycleRecord, EventIntegrator
 from .loading import LoadCycle
 from .system import DiscreteSystem
+from .validation import check_load_factor, check_same_nodes
 
 #: A node *slips* in the steady orbit when its total slip while in contact exceeds
 #: ``SHAKEDOWN_FACTOR * tol * F / A_jj``.  An orbit approached geometrically is accepted once a
@@ -187,15 +188,8 @@ def _check_inputs(system, load, lam, initial_slip, initial_gap, method, steps_pe
     if not isinstance(load, LoadCycle):
         raise InputError(f"load must be a LoadCycle; got {type(load).__name__}")
     n = system.n_nodes
-    if load.n_nodes != n:
-        raise ShapeError(f"load has {load.n_nodes} nodes but the system has {n}; build the "
-                         "LoadCycle with arrays of shape (N,)")
-    try:
-        lam = float(lam)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"lam must be a number >= 0; got {lam!r}") from exc
-    if not np.isfinite(lam) or lam < 0:
-        raise InputError(f"lam must be a finite number >= 0; got {lam}")
+    check_same_nodes(system, load)
+    lam = check_load_factor(lam)
     if method not in ("implicit", "events"):
         raise InputError(f"method must be 'implicit' or 'events'; got {method!r}")
     if isinstance(steps_per_cycle, bool) or int(steps_per_cycle) != steps_per_cycle \

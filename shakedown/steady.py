@@ -29,7 +29,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import InputError, ShapeError
+from .errors import InputError
+from .validation import check_load_factor, check_node_vector, check_same_nodes
 
 __all__ = [
     "SteadyCycle",
@@ -184,30 +185,12 @@ class _PeriodMap:
 
 
 def _check_common(system, load, lam):
-    if load.n_nodes != system.n_nodes:
-        raise ShapeError(
-            f"load has {load.n_nodes} nodes but the system has {system.n_nodes}; build the "
-            "LoadCycle with arrays of shape (N,)"
-        )
-    try:
-        lam = float(lam)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"lam must be a number >= 0; got {lam!r}") from exc
-    if not np.isfinite(lam) or lam < 0:
-        raise InputError(f"lam must be a finite number >= 0; got {lam}")
-    return lam
+    check_same_nodes(system, load)
+    return check_load_factor(lam)
 
 
 def _check_slip(name, value, n):
-    try:
-        x = np.array(value, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"{name} must be a real array of shape ({n},); got {value!r}") from exc
-    if x.shape != (n,):
-        raise ShapeError(f"{name} must have shape ({n},) (one slip per node); got {x.shape}")
-    if not np.all(np.isfinite(x)):
-        raise InputError(f"{name} must be finite; got {x[~np.isfinite(x)][0]}")
-    return x
+    return check_node_vector(name, value, n, what="slip")
 
 
 def _newton_step(P, x, y, p, h, scale):
