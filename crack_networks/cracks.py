@@ -15,7 +15,7 @@ from functools import cached_property
 import numpy as np
 from scipy.spatial import cKDTree
 
-from shakedown.errors import InputError, ShapeError
+from shakedown.model.errors import InputError, ShapeError
 
 __all__ = ["CrackSet", "segment_distance", "load_csv", "save_csv"]
 

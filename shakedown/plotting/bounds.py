@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..bounds import ShakedownBounds, extreme_constraints, safe_region
-from ..errors import InputError
+from ..bounds.engine import ShakedownBounds, extreme_constraints, safe_region
+from ..model.errors import InputError
 
 _COLORS = ("tab:blue", "tab:orange", "tab:green", "tab:red")
 _ROMAN = ("I", "II", "III", "IV")

@@ -31,7 +31,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import brentq
 
-from ..errors import InputError
+from ..model.errors import InputError
 
 
 def _Dm(D):

@@ -24,7 +24,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..errors import InputError
+from ..model.errors import InputError
 from .classify import NodePartition
 from .enumerate import MAX_ENUMERATION_NODES, enumerate_solutions, enumeration
 from .linear import active_set, linear_arpack, linear_dense

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 
-from ..errors import InputError, ShapeError
+from ..model.errors import InputError, ShapeError
 from .classify import FREE, FRICTIONLESS, SLIP, NodePartition
 
 

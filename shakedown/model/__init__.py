@@ -1,0 +1,29 @@
+"""What every stage takes: :class:`DiscreteSystem`, :class:`LoadCycle`, argument checks, errors.
+
+Imports nothing else from :mod:`shakedown`; every other package may import from here.
+"""
+
+from .errors import (
+    InputError,
+    NotPositiveDefiniteError,
+    NotSymmetricError,
+    SceneError,
+    ShakedownError,
+    ShapeError,
+    SolverError,
+)
+from .loading import LoadCycle
+from .system import CriticalFriction, DiscreteSystem
+
+__all__ = [
+    "DiscreteSystem",
+    "CriticalFriction",
+    "LoadCycle",
+    "InputError",
+    "NotPositiveDefiniteError",
+    "NotSymmetricError",
+    "SceneError",
+    "ShakedownError",
+    "ShapeError",
+    "SolverError",
+]
