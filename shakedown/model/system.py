@@ -15,6 +15,7 @@ from functools import cached_property
 import numpy as np
 import scipy.linalg as sla
 
+from . import citations
 from .errors import InputError, NotPositiveDefiniteError, NotSymmetricError, ShapeError
 
 #: Relative tolerance of the symmetry check ``max|K - K^T| <= SYMMETRY_RTOL * max|K|``.
@@ -255,6 +256,7 @@ class DiscreteSystem:
         -------
         CriticalFriction
         """
+        citations.register("klarbring1990")
         n = self.n_nodes
         f = self.friction
         fmax = float(f.max()) if n else 0.0

@@ -27,6 +27,7 @@ def _parser() -> argparse.ArgumentParser:
         prog="shakedown",
         description="Shakedown, cyclic dissipation and stability of frictional elastic systems.",
     )
+    p.add_argument("--version", action="version", version=f"shakedown {_version()}")
     sub = p.add_subparsers(dest="command", required=True)
 
     def common(sp, scene_optional):
@@ -53,6 +54,12 @@ def _parser() -> argparse.ArgumentParser:
         common(sub.add_parser(name, help=f"run the {name} analysis of a scene"), True)
     sub.add_parser("scenes", help="list the built-in scenes")
     return p
+
+
+def _version() -> str:
+    from .. import __version__
+
+    return __version__
 
 
 def _parse_value(text: str):
@@ -93,7 +100,7 @@ def _apply_overrides(scene, names, overrides):
 def main(argv=None) -> int:
     args = _parser().parse_args(argv)
     try:
-        return _main(args)
+        return _main(args, sys.argv[1:] if argv is None else argv)
     except (SceneError, InputError, ShakedownError) as exc:
         print(f"shakedown: error: {exc}", file=sys.stderr)
         return 2
@@ -102,8 +109,9 @@ def main(argv=None) -> int:
         return 130
 
 
-def _main(args) -> int:
+def _main(args, argv=()) -> int:
     from .files import builtin_scenes, load_scene, run_scene
+    from .manifest import RunRecord
     from .output import OutputFolder, Progress
 
     if args.command == "scenes":
@@ -122,6 +130,7 @@ def _main(args) -> int:
     out = OutputFolder(args.out or Path("shakedown-out") / scene.name)
     progress = Progress(enabled=not args.quiet)
     print(f"scene: {scene.label} ({scene.model['kind']}): {scene.description}".rstrip(": "))
+    record = RunRecord.start(scene, out, run_names, argv)  # resolved scene, manifest, citations
     t0 = time.perf_counter()
     summaries = run_scene(scene, out, progress, only=run_names)
     elapsed = time.perf_counter() - t0
@@ -131,8 +140,10 @@ def _main(args) -> int:
             if isinstance(value, float):
                 value = f"{value:.6g}"
             print(f"  {key}: {value}")
-    meta = {"scene": scene.label, "analyses": summaries, "elapsed_s": elapsed}
+    meta = {"scene": scene.label, "analyses": summaries, "elapsed_s": elapsed, "cite": record.cite()}
     out.write_json("summary.json", meta)
+    record.finish()
+    print(f"\n{record.cite()} (BibTeX: CITATIONS.bib)")
     print(f"\nresults written to {out.path}/ ({len(set(out.written))} files, {elapsed:.1f} s)")
     return 0
 

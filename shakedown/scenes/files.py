@@ -121,6 +121,10 @@ def resolve_scene_path(scene: str | Path | None) -> Path:
 def load_scene(scene: str | Path | None = None) -> Scene:
     """Read and validate a scene file (or a built-in scene by name)."""
     path = resolve_scene_path(scene)
+    if path.suffix == ".json":  # a run's manifest.json: its resolved scene (scenes/manifest.py)
+        from .manifest import scene_from_manifest
+
+        return scene_from_dict(scene_from_manifest(path), path=path)
     try:
         raw = tomllib.loads(path.read_text())
     except tomllib.TOMLDecodeError as exc:
