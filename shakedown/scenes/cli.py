@@ -57,7 +57,7 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _version() -> str:
-    from .. import __version__
+    from ..model.version import __version__
 
     return __version__
 
@@ -110,7 +110,7 @@ def main(argv=None) -> int:
 
 
 def _main(args, argv=()) -> int:
-    from .files import builtin_scenes, load_scene, run_scene
+    from .files import builder_module, builtin_scenes, load_scene, resolved_analyses, run_scene
     from .manifest import RunRecord
     from .output import OutputFolder, Progress
 
@@ -130,7 +130,8 @@ def _main(args, argv=()) -> int:
     out = OutputFolder(args.out or Path("shakedown-out") / scene.name)
     progress = Progress(enabled=not args.quiet)
     print(f"scene: {scene.label} ({scene.model['kind']}): {scene.description}".rstrip(": "))
-    record = RunRecord.start(scene, out, run_names, argv)  # resolved scene, manifest, citations
+    record = RunRecord.start(scene, out, resolved_analyses(scene, run_names),  # provenance
+                             builder_module(scene.model["kind"]), argv)
     t0 = time.perf_counter()
     summaries = run_scene(scene, out, progress, only=run_names)
     elapsed = time.perf_counter() - t0

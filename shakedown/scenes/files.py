@@ -223,6 +223,12 @@ def validate_options(label: str, name: str, opts) -> dict:
     return out
 
 
+def resolved_analyses(scene: Scene, names: list[str]) -> dict:
+    """``{name: options}`` of the analyses ``names`` as they run (every option filled)."""
+    return {name: scene.analyses.get(name) or validate_options(scene.label, name, {})
+            for name in names}
+
+
 def check_type(label, table, key, value, typ, help_=""):
     """Check one scene value against a type spec (a type or a tuple of types)."""
     types = typ if isinstance(typ, tuple) else (typ,)

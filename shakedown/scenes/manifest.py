@@ -111,33 +111,31 @@ def _files(table: dict) -> list[str]:
     return found
 
 
-def resolved_scene(scene, analyses: list[str]) -> dict:
+def resolved_scene(scene, analyses: dict, builder=None) -> dict:
     """The scene's tables as they run: defaults filled, file paths absolute.
 
     Parameters
     ----------
     scene : shakedown.scenes.Scene
-    analyses : list of str
-        The analyses that run (their options come from the scene, else the defaults).
+    analyses : dict
+        ``{name: options}`` of the analyses that run, every option filled
+        (:func:`shakedown.scenes.files.resolved_analyses`).
+    builder : module, optional
+        The model kind's builder; its ``resolved(model, load)``, if any, fills the defaults.
 
     Returns
     -------
     dict
         ``{"scene": ..., "model": ..., "load": ..., "analyses": {name: options}}``.
     """
-    from .files import builder_module, validate_options
-
-    builder = builder_module(scene.model["kind"])
     model = {k: v for k, v in scene.model.items() if k != "kind"}
     load = dict(scene.load)
     if hasattr(builder, "resolved"):
         model, load = builder.resolved(model, load)
     model = {"kind": scene.model["kind"], **_absolute_files(model, scene.directory)}
     load = _absolute_files(load, scene.directory)
-    opts = {name: scene.analyses.get(name) or validate_options(scene.label, name, {})
-            for name in analyses}
     return {"scene": {"name": scene.name, "description": scene.description},
-            "model": model, "load": load, "analyses": opts}
+            "model": model, "load": load, "analyses": {k: dict(v) for k, v in analyses.items()}}
 
 
 def _seeds(tables: dict, prefix: str = "") -> dict:
@@ -197,11 +195,11 @@ class RunRecord:
     ``manifest.json``.
     """
 
-    def __init__(self, scene, output, analyses: list[str], argv=None):
-        from .. import __version__
+    def __init__(self, scene, output, analyses: dict, builder=None, argv=None):
+        from ..model.version import __version__
 
         self.output = output
-        self.tables = resolved_scene(scene, analyses)
+        self.tables = resolved_scene(scene, analyses, builder)
         self.started = _now()
         inputs = {}
         for name in _files(self.tables["model"]) + _files(self.tables["load"]):
@@ -225,10 +223,14 @@ class RunRecord:
         }
 
     @classmethod
-    def start(cls, scene, output, analyses: list[str], argv=None) -> RunRecord:
-        """Begin a run: reset the citations, write ``scene.resolved.toml``."""
+    def start(cls, scene, output, analyses: dict, builder=None, argv=None) -> RunRecord:
+        """Begin a run: reset the citations, write ``scene.resolved.toml``.
+
+        ``analyses`` and ``builder`` as in :func:`resolved_scene`; ``argv`` the command's
+        arguments (default ``sys.argv[1:]``).
+        """
         citations.reset()
-        record = cls(scene, output, analyses, argv)
+        record = cls(scene, output, analyses, builder, argv)
         output.file("scene.resolved.toml").write_text(
             f"# resolved by shakedown {record.data['shakedown_version']}: "
             "every default filled in; `shakedown run` this file to run it again\n"
