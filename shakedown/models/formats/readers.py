@@ -101,6 +101,34 @@ def _container(p: Path, variable: str | None):
     return data[_pick(p, variable, names)]
 
 
+def container_names(path) -> list[str]:
+    """Names of the arrays in a ``.mat`` / ``.npz`` file."""
+    p = _path(path)
+    if p.suffix.lower() == ".npz":
+        try:
+            with np.load(p, allow_pickle=False) as data:
+                return list(data.files)
+        except Exception as exc:  # noqa: BLE001
+            raise ModelFileError(f"{p}: not a readable .npz archive ({type(exc).__name__})") from None
+    import scipy.io
+
+    try:
+        return [w[0] for w in scipy.io.whosmat(p)]
+    except NotImplementedError:
+        raise ModelFileError(f"{p}: MATLAB v7.3 (HDF5) files are not supported; save with "
+                             "save(..., '-v7')") from None
+    except Exception as exc:  # noqa: BLE001
+        raise ModelFileError(f"{p}: not a readable MATLAB file ({type(exc).__name__})") from None
+
+
+def read_array(path, variable: str) -> np.ndarray:
+    """The real array ``variable`` (any shape, dense) of a ``.mat`` / ``.npz`` file."""
+    p = _path(path)
+    value = _numeric(p, f"variable {variable!r}", _container(p, variable))
+    value = value.toarray() if sp.issparse(value) else value
+    return _finite(p, f"variable {variable!r}", value)
+
+
 def _pick(p: Path, variable, names: list[str]) -> str:
     if variable is None:
         if len(names) == 1:
