@@ -110,6 +110,9 @@ def _model_data(model: dict, scene_dir: Path):
         sources.append("A_file/B_file/C_file")
     if len(sources) > 1:
         raise SceneError(f"[model] give one source of the stiffness; got {', '.join(sources)}")
+    if "stiffness_file" not in model and any(k in model for k in STIFFNESS_KEYS):
+        raise SceneError("[model] keys " + ", ".join(k for k in STIFFNESS_KEYS if k in model)
+                         + " need 'stiffness_file'")
     data, condensed = {}, None
     if "file" in model:
         data.update(_container(scene_dir / str(model["file"]), "model", names))
@@ -133,9 +136,6 @@ def _model_data(model: dict, scene_dir: Path):
             fixed_dofs=model.get("fixed_dofs", []), tangential_sign=model.get("tangential_sign", 1),
             normal_sign=model.get("normal_sign", 1), dof_base=int(model.get("dof_base", 1)))
         data.update(dict(zip("ABC", condensed.blocks, strict=True)))
-    elif any(k in model for k in STIFFNESS_KEYS):
-        raise SceneError("[model] keys " + ", ".join(k for k in STIFFNESS_KEYS if k in model)
-                         + " need 'stiffness_file'")
     return data, condensed
 
 
