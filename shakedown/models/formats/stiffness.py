@@ -5,8 +5,10 @@ ANSYS ``HBMAT`` converted to Matrix Market, or Code_Aster ``IMPR_MATR_ASSE``) an
 each of the ``N`` contact nodes, the index of its tangential and of its normal displacement
 DOF.
 
-Conventions (MODEL.md s.1; the same frame as :mod:`shakedown.fe.condense`)
-------------------------------------------------------------------------
+Conventions
+-----------
+MODEL.md s.1, in the frame of :mod:`shakedown.fe.condense`.
+
 For contact node ``j`` let ``u_t`` be its displacement along the tangential DOF and ``u_n``
 along the normal DOF, and ``R_t``, ``R_n`` the obstacle's reaction force on the body along the
 same DOFs.  With ``s_t = tangential_sign[j]`` and ``s_n = normal_sign[j]``:
