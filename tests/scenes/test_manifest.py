@@ -165,6 +165,10 @@ def test_version_everywhere_is_the_same():
     assert r.returncode == 0 and r.stdout.strip() == f"shakedown {shakedown.__version__}"
     project = tomllib.loads((ROOT / "pyproject.toml").read_text())
     assert project["project"]["version"] == shakedown.__version__
+    import yaml
+
+    cff = yaml.safe_load((ROOT / "CITATION.cff").read_text())
+    assert cff["cff-version"] == "1.2.0" and str(cff["version"]) == shakedown.__version__
     # py.typed ships with the package (PEP 561)
     assert (ROOT / "shakedown" / "py.typed").is_file()
     assert "py.typed" in project["tool"]["setuptools"]["package-data"]["shakedown"]
