@@ -48,7 +48,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..model.errors import InputError, SolverError
+from ..model.errors import InputError, MissingDependencyError, SolverError
 
 #: Name of the column holding each row's task key.
 KEY = "task_key"
@@ -423,7 +423,12 @@ class Workers:
         self._pool = self._client = None
         self._own_client = False
         if scheduler is not None:
-            import distributed
+            try:
+                import distributed
+            except ImportError as exc:  # Dask is the one optional extra (issue 9)
+                raise MissingDependencyError(
+                    f"scheduler = {scheduler!r} needs Dask: pip install \"shakedown[parallel]\""
+                ) from exc
 
             self._distributed = distributed
             if isinstance(scheduler, distributed.Client):
