@@ -135,9 +135,12 @@ def bounds_verdict(b, adjacency: bool = False) -> str:
             f"lam1 = 0 because constraint {constraint_name(k, n)} is already inactive at lam = 0 "
             "(the safe region of the static load does not touch it), so the criterion for "
             "shakedown from every initial state does not hold at any lam > 0.")
-    if lam_adj == 0 and lam1 > 0:
-        out.append(f"lam_adj = 0: the two extreme constraints of node {int(b.adjacency_node) + 1} "
-                   "meet in the safe region already under the static load.")
+    if lam_adj == 0 and lam1 > 0 and b.adjacency_node >= 0:
+        j = int(b.adjacency_node)
+        why = (" (f p0 = 0 there: the node has no friction capacity under the static load)"
+               if abs(fp0[j]) <= 1e-12 * scale else "")
+        out.append(f"lam_adj = 0: the two extreme constraints of node {j + 1} meet in the safe "
+                   f"region already under the static load{why}.")
     elif np.isfinite(lam_adj) and _same(lam_adj, lam1):
         out.append(f"lam_adj = lam1 (node {int(b.adjacency_node) + 1}): the two extreme "
                    "constraints of that node meet exactly where the first becomes inactive.")

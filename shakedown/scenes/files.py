@@ -229,9 +229,16 @@ def validate_options(label: str, name: str, opts) -> dict:
     """Fill and type-check the options of analysis ``name`` from its ``OPTIONS`` schema."""
     if not isinstance(opts, dict):
         raise SceneError(f"{label}: [analyses.{name}] must be a table; got {opts!r}")
-    schema = analysis_module(name, label).OPTIONS
+    module = analysis_module(name, label)
+    schema = module.OPTIONS
+    aliases = getattr(module, "ALIASES", {})  # old option names still accepted
     out = {}
     for key, value in opts.items():
+        if key in aliases:
+            if aliases[key] in opts:
+                raise SceneError(f"{label}: [analyses.{name}] give {aliases[key]!r} or its old "
+                                 f"name {key!r}, not both")
+            key = aliases[key]
         if key not in schema:
             raise SceneError(
                 f"{label}: [analyses.{name}] key {key!r} is not allowed; allowed: "
