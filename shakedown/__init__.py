@@ -12,6 +12,7 @@ from importlib import import_module as _import_module
 
 from .model.errors import (
     InputError,
+    MissingDependencyError,
     NotPositiveDefiniteError,
     NotSymmetricError,
     SceneError,
@@ -114,6 +115,7 @@ __all__ = [
     "CriticalFriction",
     "LoadCycle",
     "InputError",
+    "MissingDependencyError",
     "ShapeError",
     "NotSymmetricError",
     "NotPositiveDefiniteError",

@@ -5,6 +5,7 @@ Imports nothing else from :mod:`shakedown`; every other package may import from 
 
 from .errors import (
     InputError,
+    MissingDependencyError,
     NotPositiveDefiniteError,
     NotSymmetricError,
     SceneError,
@@ -20,6 +21,7 @@ __all__ = [
     "CriticalFriction",
     "LoadCycle",
     "InputError",
+    "MissingDependencyError",
     "NotPositiveDefiniteError",
     "NotSymmetricError",
     "SceneError",

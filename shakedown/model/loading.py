@@ -27,6 +27,17 @@ def _vector(name: str, value, n: int | None) -> np.ndarray:
     return arr
 
 
+def _static_pair(q0, p0) -> tuple[np.ndarray, np.ndarray]:
+    """``q0`` and ``p0``, one entry per node each; a length mismatch names both (issue 9)."""
+    q0, p0 = _vector("q0", q0, None), _vector("p0", p0, None)
+    if q0.shape != p0.shape:
+        raise ShapeError(
+            f"q0 has {q0.size} entries but p0 has {p0.size}: both need one entry per node; "
+            "fix the one whose length is not the number of nodes"
+        )
+    return q0, p0
+
+
 def _table(name: str, value, n: int, *, allow_1d: bool) -> np.ndarray:
     try:
         arr = np.array(value, dtype=float)
@@ -36,7 +47,8 @@ def _table(name: str, value, n: int, *, allow_1d: bool) -> np.ndarray:
         arr = arr[None, :]
     if arr.ndim != 2 or arr.shape[1] != n:
         shapes = f"({n},) or (n_harmonics, {n})" if allow_1d else f"(n_samples, {n})"
-        raise ShapeError(f"{name} must have shape {shapes}; got shape {np.shape(value)}")
+        raise ShapeError(f"{name} must have shape {shapes} (N = {n} nodes, the length of q0); "
+                         f"got shape {np.shape(value)}")
     if not np.all(np.isfinite(arr)):
         raise InputError(f"{name} must be finite; got {arr[~np.isfinite(arr)][0]}")
     return arr
@@ -85,9 +97,8 @@ class LoadCycle:
         ``(n_harmonics, N)``; omitted arrays are zero.  Arrays with fewer harmonics are
         zero-padded.
         """
-        q0 = _vector("q0", q0, None)
+        q0, p0 = _static_pair(q0, p0)
         n = q0.shape[0]
-        p0 = _vector("p0", p0, n)
         given = {"q_cos": q_cos, "q_sin": q_sin, "p_cos": p_cos, "p_sin": p_sin}
         tables = {
             k: _table(k, v, n, allow_1d=True) for k, v in given.items() if v is not None
@@ -109,9 +120,8 @@ class LoadCycle:
         Between samples the load is linear; the cycle closes from the last sample back to the
         first.  At least two samples are needed.
         """
-        q0 = _vector("q0", q0, None)
+        q0, p0 = _static_pair(q0, p0)
         n = q0.shape[0]
-        p0 = _vector("p0", p0, n)
         q1 = _table("q1", q1, n, allow_1d=False)
         p1 = _table("p1", p1, n, allow_1d=False)
         if q1.shape != p1.shape:

@@ -50,6 +50,14 @@ def _as_matrix(name: str, value, n: int | None = None) -> np.ndarray:
 
 
 def _as_friction(value, n: int) -> np.ndarray:
+    kind = np.asarray(value).dtype.kind if not isinstance(value, (str, bytes)) else "U"
+    if kind in "bUS" or ((kind == "O" or isinstance(value, (list, tuple)))
+                         and not _all_numbers(value)):
+        # "0.7" and True would convert silently to 0.7 and 1.0 (issue 9)
+        raise InputError(
+            f"friction must be a number >= 0 or one number per node (shape ({n},)); got "
+            f"{value!r} ({type(value).__name__}): write it as a plain number, e.g. friction=0.7"
+        )
     try:
         f = np.array(value, dtype=float)
     except (TypeError, ValueError) as exc:
@@ -67,6 +75,13 @@ def _as_friction(value, n: int) -> np.ndarray:
         raise InputError(f"friction must be >= 0; node {j} has friction {f[j]}")
     f.setflags(write=False)
     return f
+
+
+def _all_numbers(value) -> bool:
+    """Every leaf of ``value`` is a real number (not a bool or a string)."""
+    flat = np.asarray(value, dtype=object).ravel()
+    return all(isinstance(x, (int, float, np.integer, np.floating))
+               and not isinstance(x, (bool, np.bool_)) for x in flat)
 
 
 @dataclass(frozen=True)

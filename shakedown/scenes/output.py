@@ -5,11 +5,11 @@ from __future__ import annotations
 import json
 import math
 import re
-import sys
-import time
 from pathlib import Path
 
 import numpy as np
+
+from ..model.progress import ProgressDisplay
 
 _SAFE_NAME = re.compile(r"^[A-Za-z0-9_.-]+$")
 
@@ -91,48 +91,5 @@ class OutputFolder:
         return p
 
 
-class Progress:
-    """Progress display on stderr: a live line on a terminal, a few plain lines otherwise.
-
-    Use as ``for item in progress(iterable, total=n, desc="cycles"): ...``.
-    """
-
-    def __init__(self, enabled: bool = True, stream=None):
-        self.enabled = enabled
-        self.stream = stream or sys.stderr
-
-    def __call__(self, iterable, total: int | None = None, desc: str = ""):
-        if total is None:
-            try:
-                total = len(iterable)
-            except TypeError:
-                total = None
-        if not self.enabled:
-            yield from iterable
-            return
-        tty = hasattr(self.stream, "isatty") and self.stream.isatty()
-        t0 = time.perf_counter()
-        last_report = -1.0
-        i = 0
-        for i, item in enumerate(iterable, start=1):
-            yield item
-            now = time.perf_counter() - t0
-            if tty or total is None or now - last_report > 5.0 or i == total:
-                self.stream.write(self._line(desc, i, total, now) + ("\r" if tty else "\n"))
-                self.stream.flush()
-                last_report = now
-        if tty:
-            self.stream.write("\n")
-            self.stream.flush()
-
-    @staticmethod
-    def _line(desc, i, total, elapsed):
-        if total:
-            eta = elapsed / i * (total - i) if i else float("nan")
-            return f"{desc}: {i}/{total} ({100 * i / total:3.0f}%) {elapsed:6.1f} s, ~{eta:5.1f} s left"
-        return f"{desc}: {i} {elapsed:6.1f} s"
-
-    def log(self, message: str) -> None:
-        if self.enabled:
-            self.stream.write(message + "\n")
-            self.stream.flush()
+#: The command's progress display (tqdm on stderr); the old name is kept.
+Progress = ProgressDisplay

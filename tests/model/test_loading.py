@@ -51,8 +51,11 @@ def test_samples_interpolation_and_round_trip():
 
 
 def test_bad_input_messages():
-    with pytest.raises(sd.ShapeError, match=r"p0 must have shape \(2,\)"):
+    # a length mismatch names both vectors (issue 9: a wrong q0 used to be reported as p0)
+    with pytest.raises(sd.ShapeError, match="q0 has 2 entries but p0 has 1"):
         sd.LoadCycle.from_harmonics([0.0, 0.0], [1.0])
+    with pytest.raises(sd.ShapeError, match="q0 has 3 entries but p0 has 2"):
+        sd.LoadCycle.from_samples([0.0, 0.0, 1.0], [1.0, 1.0], np.ones((3, 2)), np.ones((3, 2)))
     with pytest.raises(sd.InputError, match="q0 must be finite"):
         sd.LoadCycle.from_harmonics([np.inf], [1.0])
     with pytest.raises(sd.ShapeError, match="q_cos must have shape"):
