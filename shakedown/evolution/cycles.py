@@ -21,7 +21,7 @@ import numpy as np
 from ..model.errors import InputError
 from ..model.loading import LoadCycle
 from ..model.system import DiscreteSystem
-from ..model.validation import check_load_factor, check_same_nodes
+from ..model.validation import check_count, check_load_factor, check_same_nodes
 from .complementarity import (
     FEAS_TOL,
     SEPARATED,
@@ -192,11 +192,8 @@ def _check_inputs(system, load, lam, initial_slip, initial_gap, method, steps_pe
     lam = check_load_factor(lam)
     if method not in ("implicit", "events"):
         raise InputError(f"method must be 'implicit' or 'events'; got {method!r}")
-    if isinstance(steps_per_cycle, bool) or int(steps_per_cycle) != steps_per_cycle \
-            or steps_per_cycle < 2:
-        raise InputError(f"steps_per_cycle must be an integer >= 2; got {steps_per_cycle!r}")
-    if isinstance(max_cycles, bool) or int(max_cycles) != max_cycles or max_cycles < 1:
-        raise InputError(f"max_cycles must be an integer >= 1; got {max_cycles!r}")
+    steps_per_cycle = check_count("steps_per_cycle", steps_per_cycle, 2)
+    max_cycles = check_count("max_cycles", max_cycles, 1)
     try:
         tol = float(tol)
     except (TypeError, ValueError) as exc:

@@ -63,7 +63,7 @@ def restricted_eigenpairs(K0, K1, support=None, *, sign_rtol: float = SUPPORT_RT
         if -k1 / K0[0, 0] > nu_min:
             return [(-K0[0, 0] / k1, np.ones(1), True)]
         return []
-    nu, V = sla.eig(-K1, K0, check_finite=False)
+    nu, V = sla.eig(-K1, K0)  # checks finiteness: K0, K1 may come from a caller
     return _pairs_from(nu, V, sign_rtol, nu_min)
 
 
