@@ -217,6 +217,38 @@ class LoadCycle:
         m, t = self.periodic_min(-np.asarray(cq, float), -np.asarray(cp, float))
         return -m, t
 
+    # ------------------------------------------------------------------ sampling error
+    def sampling_error(self, n_samples: int) -> tuple[np.ndarray, np.ndarray]:
+        """Largest error of the periodic part when it is sampled at ``n_samples`` equal steps.
+
+        Per node, ``max_t |r1(t) - r1_S(t)|`` for ``r1 = q1, p1`` and ``r1_S`` the piecewise-linear
+        interpolant through ``t = k / n_samples`` (what :meth:`to_samples` and implicit steps
+        see).  Multiply by ``lam`` for the welded reactions [force].
+
+        Harmonics (closed form): a harmonic ``k`` of amplitude ``a_k`` sampled every
+        ``1 / S`` loses at most ``a_k (1 - cos(pi k / S))`` (reached when a peak falls midway
+        between samples: the chord lies ``a_k (1 - cos(pi k / S))`` below it); the sum over
+        harmonics bounds the error of several (exact for one).  Samples: exact, from the
+        breakpoints of both piecewise-linear functions (0 when the sample times are a subset
+        of the new ones).
+
+        Returns
+        -------
+        err_q, err_p : ndarray, shape (N,)
+            [force per unit load factor].
+        """
+        S = check_count("n_samples", n_samples, 2)
+        if self.kind == "harmonic":
+            loss = 1.0 - np.cos(np.pi * np.arange(1, self.n_harmonics + 1) / S)  # (H,)
+            return (loss @ np.hypot(self.q_cos, self.q_sin),
+                    loss @ np.hypot(self.p_cos, self.p_sin))
+        if S % self.n_samples == 0:
+            return np.zeros(self.n_nodes), np.zeros(self.n_nodes)
+        t = np.union1d(np.arange(S) / S, self.breakpoints)
+        exact = self.periodic(t)
+        coarse = self.to_samples(S).periodic(t)
+        return tuple(np.abs(e - c).max(axis=0) for e, c in zip(exact, coarse, strict=True))
+
     # ------------------------------------------------------------------ transformations
     def to_samples(self, n_samples: int) -> LoadCycle:
         """Piecewise-linear interpolant of this load through ``n_samples`` equally spaced samples."""

@@ -27,6 +27,17 @@ def check_load_factor(lam) -> float:
     return lam
 
 
+def check_positive(name: str, value, *, unit: str = "") -> float:
+    """``value`` as a finite float ``> 0`` (a length, a modulus, a density)."""
+    try:
+        x = float(value)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{name} must be a finite number > 0{unit}; got {value!r}") from exc
+    if not (np.isfinite(x) and x > 0):
+        raise InputError(f"{name} must be a finite number > 0{unit}; got {x}")
+    return x
+
+
 def check_count(name: str, value, minimum: int) -> int:
     """``value`` as an integer ``>= minimum``; bools, NaN, fractions and text are refused."""
     ok = isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
