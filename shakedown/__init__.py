@@ -18,6 +18,7 @@ from .model.errors import (
     ShakedownError,
     ShapeError,
     SolverError,
+    UnsafePathError,
 )
 from .model.loading import LoadCycle
 from .model.system import CriticalFriction, DiscreteSystem
@@ -120,5 +121,6 @@ __all__ = [
     "SceneError",
     "ShakedownError",
     "SolverError",
+    "UnsafePathError",
     *_LAZY,
 ]

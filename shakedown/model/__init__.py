@@ -11,6 +11,7 @@ from .errors import (
     ShakedownError,
     ShapeError,
     SolverError,
+    UnsafePathError,
 )
 from .loading import LoadCycle
 from .system import CriticalFriction, DiscreteSystem
@@ -26,4 +27,5 @@ __all__ = [
     "ShakedownError",
     "ShapeError",
     "SolverError",
+    "UnsafePathError",
 ]
