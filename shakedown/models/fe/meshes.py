@@ -389,7 +389,9 @@ def from_file(path, element: str | None = None, boundaries: dict | None = None) 
     try:
         mesh = Mesh.load(str(path))
     except Exception as exc:  # meshio raises many types
-        raise InputError(f"could not read mesh file {str(path)!r}: {exc}") from exc
+        # the reader's message may quote the file: name only the error's type
+        raise InputError(f"could not read mesh file {str(path)!r} ({type(exc).__name__}); "
+                         "give a mesh format meshio reads (gmsh .msh, .vtk, .xdmf)") from None
     name = type(mesh).__name__
     if name not in ("MeshTri1", "MeshQuad1"):
         raise InputError(
