@@ -358,9 +358,10 @@ def solve_cycles(system: DiscreteSystem, load: LoadCycle, lam: float, initial_sl
             period = 2
             break
 
-    run = _finish(system, solver, load, lam, method, n_steps, tol, F, dtol, records, history,
-                  period, W_list, change, starts_v, starts_w, v, w, ok, fail_msg, note,
-                  step_statuses, max_res, totals0, t_start, integrator, max_cycles)
+    with np.errstate(over="ignore", invalid="ignore"):  # overflow becomes status non_finite
+        run = _finish(system, solver, load, lam, method, n_steps, tol, F, dtol, records,
+                      history, period, W_list, change, starts_v, starts_w, v, w, ok, fail_msg,
+                      note, step_statuses, max_res, totals0, t_start, integrator, max_cycles)
     return _trust(run, system, exact_load, records[-period:] if period else [], solver)
 
 

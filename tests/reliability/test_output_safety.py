@@ -94,3 +94,11 @@ def test_output_folder_file_names(tmp_path):
         with pytest.raises(sd.UnsafePathError, match="plain file name"):
             out.write_json(bad, {})
     assert out.write_json("ok.json", {"x": float("nan")}).read_text().strip().endswith("}")
+
+
+def test_cli_overflow_is_an_error_not_a_traceback(tmp_path, monkeypatch, capsys):
+    # issue 10 item 6: `shakedown cycles ... --set lam=1e300` ended in a matplotlib traceback
+    (tmp_path / "s.toml").write_text(SCENE.format(name='"s"') + "[analyses.cycles]\n")
+    monkeypatch.chdir(tmp_path)
+    assert main(["cycles", "s.toml", "-q", "--set", "lam=1e300", "--set", "max_cycles=3"]) == 2
+    assert "not finite" in capsys.readouterr().err
