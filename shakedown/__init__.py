@@ -19,6 +19,7 @@ from .model.errors import (
     ShakedownError,
     ShapeError,
     SolverError,
+    UnsafePathError,
 )
 from .model.loading import LoadCycle
 from .model.system import CriticalFriction, DiscreteSystem
@@ -122,5 +123,6 @@ __all__ = [
     "SceneError",
     "ShakedownError",
     "SolverError",
+    "UnsafePathError",
     *_LAZY,
 ]

@@ -21,7 +21,7 @@ import numpy as np
 from ..model.errors import InputError
 from ..model.loading import LoadCycle
 from ..model.system import DiscreteSystem
-from ..model.validation import check_load_factor, check_same_nodes
+from ..model.validation import check_count, check_load_factor, check_same_nodes
 from .complementarity import (
     FEAS_TOL,
     SEPARATED,
@@ -31,6 +31,7 @@ from .complementarity import (
     _vec,
 )
 from .events import CycleRecord, EventIntegrator
+from .sampling import check_sampling, non_finite_message
 
 #: A node *slips* in the steady orbit when its total slip while in contact exceeds
 #: ``SHAKEDOWN_FACTOR * tol * F / A_jj``.  An orbit approached geometrically is accepted once a
@@ -126,7 +127,8 @@ class CycleRun:
         Over the steady orbit (None if none).
     status : str
         ``"periodic"``, ``"not_converged"`` (no steady orbit within ``max_cycles``) or
-        ``"step_failed"`` (a step / rate problem had no verified solution; the run stopped).
+        ``"step_failed"`` (a step / rate problem had no verified solution; the run stopped) or
+        ``"non_finite"`` (the numbers overflowed: load factor or units too large).
     message : str
         Human-readable summary, including non-unique steps (friction above critical) if any.
     max_residual : float
@@ -145,6 +147,13 @@ class CycleRun:
         Implicit: the state assignments of the last period's steps, shape (steps, N).
     history : pandas.DataFrame or None
         All periods' time series (``record_history=True``), same columns as ``steady_table``.
+    sampling_error : float
+        Largest error of the welded reactions the run saw, sampled at ``steps_per_cycle``
+        points, against the given load [force] (closed form for harmonics; 0 for the event
+        path of a sampled load), see :mod:`shakedown.evolution.sampling`.
+    within_sampling_error : bool
+        The run shook down, but the exact load breaks a stick constraint at its final state:
+        the verdict lies within the sampling error (the message says where).
     """
 
     dissipation: np.ndarray
@@ -174,6 +183,8 @@ class CycleRun:
     load: LoadCycle = field(repr=False)
     final_active_sets: np.ndarray | None = field(default=None, repr=False)
     history: object = field(default=None, repr=False)
+    sampling_error: float = 0.0
+    within_sampling_error: bool = False
 
     @property
     def success(self) -> bool:
@@ -192,11 +203,8 @@ def _check_inputs(system, load, lam, initial_slip, initial_gap, method, steps_pe
     lam = check_load_factor(lam)
     if method not in ("implicit", "events"):
         raise InputError(f"method must be 'implicit' or 'events'; got {method!r}")
-    if isinstance(steps_per_cycle, bool) or int(steps_per_cycle) != steps_per_cycle \
-            or steps_per_cycle < 2:
-        raise InputError(f"steps_per_cycle must be an integer >= 2; got {steps_per_cycle!r}")
-    if isinstance(max_cycles, bool) or int(max_cycles) != max_cycles or max_cycles < 1:
-        raise InputError(f"max_cycles must be an integer >= 1; got {max_cycles!r}")
+    steps_per_cycle = check_count("steps_per_cycle", steps_per_cycle, 2)
+    max_cycles = check_count("max_cycles", max_cycles, 1)
     try:
         tol = float(tol)
     except (TypeError, ValueError) as exc:
@@ -277,6 +285,7 @@ def solve_cycles(system: DiscreteSystem, load: LoadCycle, lam: float, initial_sl
     t_start = time.perf_counter()
     totals0 = dict(solver.totals)
     note = ""
+    exact_load = load
     if method == "events" and load.kind != "samples":
         load = load.to_samples(n_steps)
         note = (f"harmonic load replaced by its piecewise-linear interpolant through "
@@ -349,9 +358,29 @@ def solve_cycles(system: DiscreteSystem, load: LoadCycle, lam: float, initial_sl
             period = 2
             break
 
-    return _finish(system, solver, load, lam, method, n_steps, tol, F, dtol, records, history,
-                   period, W_list, change, starts_v, starts_w, v, w, ok, fail_msg, note,
-                   step_statuses, max_res, totals0, t_start, integrator, max_cycles)
+    with np.errstate(over="ignore", invalid="ignore"):  # overflow becomes status non_finite
+        run = _finish(system, solver, load, lam, method, n_steps, tol, F, dtol, records,
+                      history, period, W_list, change, starts_v, starts_w, v, w, ok, fail_msg,
+                      note, step_statuses, max_res, totals0, t_start, integrator, max_cycles)
+    return _trust(run, system, exact_load, records[-period:] if period else [], solver)
+
+
+def _trust(run, system, exact_load, orbit, solver):
+    """Overflow is a failure; a shakedown within the load's sampling error is flagged."""
+    from dataclasses import replace
+
+    numbers = (run.dissipation, run.final_slip, run.final_gap, [run.force_scale])
+    if not all(np.all(np.isfinite(x)) for x in numbers) or (
+            run.period and not np.isfinite(run.steady_dissipation)):
+        return replace(run, status="non_finite", shook_down=False,
+                       message=non_finite_message(run.force_scale, system) + "; " + run.message)
+    if run.method == "events" and exact_load.kind == "samples":
+        return run  # the exact path of the given samples: nothing was sampled
+    chk = check_sampling(system, exact_load, run.lam, run.steps_per_cycle, run.final_slip,
+                         run.final_gap, run.shook_down, orbit, run.force_scale,
+                         solver.feas_tol * run.force_scale)
+    msg = run.message + ("; " + chk.message if chk.within else "")
+    return replace(run, sampling_error=chk.error, within_sampling_error=chk.within, message=msg)
 
 
 def _implicit_cycle(solver, c, v, w, prev_states, guess, qw, pw, load, lam, step_statuses):

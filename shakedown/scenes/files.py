@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..model.errors import InputError, SceneError
+from .output import check_plain_name
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -196,8 +197,15 @@ def scene_from_dict(raw: dict, path: Path | None = None) -> Scene:
     for name, opts in analyses_raw.items():
         analyses[name] = validate_options(label, name, opts)
     default_name = path.stem if path is not None else "scene"
+    name = meta.get("name", default_name)
+    if not isinstance(name, str):
+        raise SceneError(f"{label}: [scene] key 'name' = {name!r} must be a string")
+    try:
+        name = check_plain_name(name, "[scene] key 'name'")
+    except InputError as exc:
+        raise SceneError(f"{label}: {exc}") from None
     return Scene(
-        name=str(meta.get("name", default_name)),
+        name=name,
         description=str(meta.get("description", "")),
         model=dict(model),
         load=dict(load),

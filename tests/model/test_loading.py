@@ -64,5 +64,5 @@ def test_bad_input_messages():
         sd.LoadCycle.from_samples([0.0], [1.0], [[1.0]], [[0.0]])
     with pytest.raises(sd.ShapeError, match="q1 and p1 must have the same shape"):
         sd.LoadCycle.from_samples([0.0], [1.0], np.ones((3, 1)), np.ones((4, 1)))
-    with pytest.raises(sd.InputError, match="n_samples must be >= 2"):
+    with pytest.raises(sd.InputError, match="n_samples must be an integer >= 2"):
         sd.LoadCycle.static([0.0], [1.0]).to_samples(1)

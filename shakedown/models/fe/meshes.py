@@ -24,6 +24,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ...model.errors import InputError
+from ...model.validation import check_count, check_positive, real_array
 
 ELEMENTS = ("P1", "P2", "Q1")
 PATTERNS = ("diagonal", "anti-diagonal", "union-jack", "crossed")
@@ -131,8 +132,7 @@ def _segment_facets(mesh, segment, name) -> np.ndarray:
 
 def _check_divisions(nx, ny):
     for name, n in (("nx", nx), ("ny", ny)):
-        if int(n) != n or n < 1:
-            raise InputError(f"{name} (number of cells) must be an integer >= 1; got {n!r}")
+        check_count(f"{name} (number of cells)", n, 1)
     return int(nx), int(ny)
 
 
@@ -212,12 +212,14 @@ def rectangle(
     >>> m.mesh.p.shape
     (2, 121)
     """
-    width, height = float(width), float(height)
-    if not (width > 0 and height > 0):
-        raise InputError(f"width and height must be > 0; got {width}, {height}")
+    width = check_positive("width", width, unit=" [length]")
+    height = check_positive("height", height, unit=" [length]")
     nx, ny = _check_divisions(nx, ny)
     m = _structured(nx, ny, element, pattern)
-    p = m.p * np.array([[width], [height]]) + np.asarray(origin, float).reshape(2, 1)
+    o = real_array("origin", origin)
+    if o.shape != (2,) or not np.all(np.isfinite(o)):
+        raise InputError(f"origin must be two finite numbers (x0, y0) [length]; got {origin!r}")
+    p = m.p * np.array([[width], [height]]) + o.reshape(2, 1)
     return FEMesh(replace(m, doflocs=p), element,
                   f"rectangle {width:g}x{height:g}, {nx}x{ny} cells, {pattern}")
 
@@ -239,9 +241,9 @@ def trapezoid(
     square's structured mesh is mapped row by row.  Boundaries: ``"bottom"``, ``"top"``,
     ``"left"``, ``"right"``.
     """
-    bw, tw, h = float(bottom_width), float(top_width), float(height)
-    if not (bw > 0 and tw > 0 and h > 0):
-        raise InputError(f"widths and height must be > 0; got {bw}, {tw}, {h}")
+    bw = check_positive("bottom_width", bottom_width, unit=" [length]")
+    tw = check_positive("top_width", top_width, unit=" [length]")
+    h = check_positive("height", height, unit=" [length]")
     nx, ny = _check_divisions(nx, ny)
     off = 0.5 * (bw - tw) if top_offset is None else float(top_offset)
     m = _structured(nx, ny, element, pattern)
@@ -268,7 +270,9 @@ def from_file(path, element: str | None = None, boundaries: dict | None = None) 
     try:
         mesh = Mesh.load(str(path))
     except Exception as exc:  # meshio raises many types
-        raise InputError(f"could not read mesh file {str(path)!r}: {exc}") from exc
+        # the reader's message may quote the file: name only the error's type
+        raise InputError(f"could not read mesh file {str(path)!r} ({type(exc).__name__}); "
+                         "give a mesh format meshio reads (gmsh .msh, .vtk, .xdmf)") from None
     name = type(mesh).__name__
     if name not in ("MeshTri1", "MeshQuad1"):
         raise InputError(

@@ -32,8 +32,12 @@ def _npz(path: Path, table: str) -> dict:
         raise SceneError(f"[{table}] key 'file' = {str(path)!r} must name an .npz file")
     if not path.is_file():
         raise SceneError(f"[{table}] key 'file' = {str(path)!r}: no such file")
-    with np.load(path, allow_pickle=False) as data:
-        return {k: np.array(data[k]) for k in data.files}
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            return {k: np.array(data[k]) for k in data.files}
+    except Exception as exc:  # zipfile / format errors; their text may quote the file
+        raise SceneError(f"[{table}] key 'file' = {str(path)!r} is not a readable .npz of "
+                         f"numeric arrays ({type(exc).__name__})") from None
 
 
 def _array(table, key, value):
