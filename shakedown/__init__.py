@@ -23,8 +23,7 @@ from .model.errors import (
 )
 from .model.loading import LoadCycle
 from .model.system import CriticalFriction, DiscreteSystem
-
-__version__ = "0.1.0"
+from .model.version import __version__ as __version__
 
 # analyses are imported lazily so that `import shakedown` stays light
 _LAZY = {

@@ -15,6 +15,7 @@ from functools import cached_property
 import numpy as np
 import scipy.linalg as sla
 
+from . import citations
 from .errors import InputError, NotSymmetricError, ShapeError
 from .validation import check_conditioning, real_array
 
@@ -259,6 +260,7 @@ class DiscreteSystem:
         -------
         CriticalFriction
         """
+        citations.register("klarbring1990")
         n = self.n_nodes
         f = self.friction
         fmax = float(f.max()) if n else 0.0

@@ -143,6 +143,10 @@ def resolve_scene_path(scene: str | Path | None) -> Path:
 def load_scene(scene: str | Path | None = None) -> Scene:
     """Read and validate a scene file (or a built-in scene by name)."""
     path = resolve_scene_path(scene)
+    if path.suffix == ".json":  # a run's manifest.json: its resolved scene (scenes/manifest.py)
+        from .manifest import scene_from_manifest
+
+        return scene_from_dict(scene_from_manifest(path), path=path)
     try:
         raw = tomllib.loads(path.read_text())
     except tomllib.TOMLDecodeError as exc:
@@ -257,6 +261,12 @@ def validate_options(label: str, name: str, opts) -> dict:
     for key, (_, default, _) in schema.items():
         out.setdefault(key, default)
     return out
+
+
+def resolved_analyses(scene: Scene, names: list[str]) -> dict:
+    """``{name: options}`` of the analyses ``names`` as they run (every option filled)."""
+    return {name: scene.analyses.get(name) or validate_options(scene.label, name, {})
+            for name in names}
 
 
 def check_type(label, table, key, value, typ, help_=""):
