@@ -257,7 +257,9 @@ def test_stiffness_ratio_1e8():
     assert ev.status == im.status == "periodic"
     assert ev.max_residual <= 1e-9 and im.max_residual <= 1e-9
     assert ev.energy_identity.relative_difference <= 1e-9
-    assert im.steady_dissipation == pytest.approx(ev.steady_dissipation, rel=2e-3)
+    # implicit (3000 steps, on the sample breakpoints) vs exact events: measured 1.3e-5
+    # relative (second-order time discretisation); 4e-5 is 3x that
+    assert im.steady_dissipation == pytest.approx(ev.steady_dissipation, rel=4e-5)
     # both nodes slip: the stiff one with slips ~1e-8, still detected as slipping
     assert ev.stuck_nodes.size == 0 and np.ptp(ev.steady_table.query("node == 1")["slip"]) > 0
 
@@ -277,7 +279,9 @@ def test_nodes_open_and_close_every_cycle():
         assert (gap_open["gap"] >= 0).all() and (gap_open["gap"] > 0).any()
         np.testing.assert_allclose(gap_open["p"], 0, atol=1e-9 * run.force_scale)
     ev = sd.solve_cycles(s, load, 1.0, method="events")
-    assert run.steady_dissipation == pytest.approx(ev.steady_dissipation, rel=2e-2)
+    # implicit with 400 steps vs exact events: measured -8.9e-3 relative (opening and closing
+    # events fall between steps: first-order error there); 1.5e-2 is 1.7x that
+    assert run.steady_dissipation == pytest.approx(ev.steady_dissipation, rel=1.5e-2)
 
 
 @pytest.mark.slow  # ~10-25 s on 2 busy cores, mostly building and checking the 4000 x 4000 K
