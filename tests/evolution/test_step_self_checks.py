@@ -115,3 +115,45 @@ def test_lexicographic_lemke_solves_degenerate_problems(M, q):
     assert res.z.min() >= -1e-12 and w.min() >= -1e-12
     assert np.abs(res.z * w).max() <= 1e-12
     np.testing.assert_allclose(res.w, w, atol=1e-12)
+
+
+# ---------------------------------------------------------------------------- energy identity
+class _WrongReactions(StepSolver):
+    """Returns every step with the tangential reactions of slipping nodes 2% too large (a
+    wrong friction force that the step's own residual fields do not show)."""
+
+    def solve(self, v_prev, q_w, p_w, guess=None):
+        import dataclasses
+
+        r = super().solve(v_prev, q_w, p_w, guess)
+        slipping = r.slip_increment != 0
+        return dataclasses.replace(r, q=np.where(slipping, 1.02 * r.q, r.q))
+
+
+class _WrongSlips(StepSolver):
+    """Returns every step with its slip increment 2% too large (reactions unchanged)."""
+
+    def solve(self, v_prev, q_w, p_w, guess=None):
+        import dataclasses
+
+        r = super().solve(v_prev, q_w, p_w, guess)
+        dv = 1.02 * r.slip_increment
+        return dataclasses.replace(r, slip=v_prev + dv, slip_increment=dv)
+
+
+@pytest.mark.parametrize("wrong", [_WrongReactions, _WrongSlips])
+def test_energy_identity_flags_wrong_steps(wrong):
+    """The exact discrete energy balance of the implicit steps (EnergyIdentity) holds to
+    round-off for the real solver (measured 1e-16 relative) and is violated visibly (>1e-4)
+    when the steps' answers are wrong by 2%."""
+    s = sd.DiscreteSystem([[2.0, 0.5], [0.5, 2.0]], [[0.2, 0.1], [-0.1, 0.3]],
+                          [[3.0, 0.0], [0.0, 3.0]], friction=0.4)
+    load = sd.LoadCycle.from_harmonics([0.0, 0.1], [1.0, 1.0], q_cos=[1.0, 0.0],
+                                       q_sin=[0.0, 1.0])
+    kw = dict(steps_per_cycle=40, max_cycles=30)
+    good = sd.solve_cycles(s, load, 0.9, **kw)
+    assert good.status == "periodic" and good.steady_dissipation > 0
+    assert good.energy_identity.discrete_relative_difference <= 1e-12
+    bad = sd.solve_cycles(s, load, 0.9, solver=wrong(s), **kw)
+    assert bad.energy_identity is not None, bad.message
+    assert bad.energy_identity.discrete_relative_difference > 1e-4, bad.energy_identity
