@@ -12,7 +12,9 @@ The oracles here share nothing with the engine but MODEL.md s.3:
 * the dense-LP certificate (``kkt_residuals`` / ``batch_residuals``) is fed deliberately wrong
   answers and must flag each one.
 
-Tolerances: the engine certifies its LP answers to 1e-7 (``dense_lp.CERT_TOL``) and its
+Tolerances: the hand assembly repeats the engine's arithmetic on the same numbers, so it agrees
+to round-off (1e-13 relative, 1e-12 for the hypot of the harmonic extremes).  The engine
+certifies its LP answers to 1e-7 (``dense_lp.CERT_TOL``) and its
 vertices agree with exact ones to ~1e-12 on these well-conditioned systems; scipy's HiGHS
 works to its feasibility tolerance 1e-7, hence 1e-6 relative between the two.  The bisection
 stops at 1e-10 relative.

@@ -95,6 +95,7 @@ def test_implicit_converges_to_events_first_order(n, p0):
     errs = []
     for m in (70, 280, 1120):
         run = sd.solve_cycles(s, load, 1.0, steps_per_cycle=m)
+        # every step verified to FEAS_TOL = 1e-9 (relative natural residual)
         assert run.status == "periodic" and run.max_residual <= 1e-9
         errs.append(abs(run.steady_dissipation - ev.steady_dissipation) / ev.steady_dissipation)
     # backward Euler with end-of-step q: first order in 1/m (factor 4 per refinement; >= 2.5)
@@ -138,6 +139,7 @@ def test_oracle_step_by_step_along_an_evolution_with_separation():
             rows = h[(h["cycle"] == c) & np.isclose(h["t"], t)].sort_values("node")
             q_w, p_w = load.evaluate(t, 1.0)
             (vv, ww, qq, pp), = oracle(s, v, q_w, p_w)
+            # two solves of the same small linear systems (force and stiffness ~1): ~1e-13
             np.testing.assert_allclose(rows["slip"], vv, atol=1e-9)
             np.testing.assert_allclose(rows["gap"], ww, atol=1e-9)
             np.testing.assert_allclose(rows["p"], pp, atol=1e-9)
@@ -255,6 +257,8 @@ def test_stiffness_ratio_1e8():
     ev = sd.solve_cycles(s, load, 1.0, method="events")
     im = sd.solve_cycles(s, load, 1.0, steps_per_cycle=3000)
     assert ev.status == im.status == "periodic"
+    # steps verified to FEAS_TOL = 1e-9; the event path's energy identity is exact (affine
+    # between events) up to the same tolerance
     assert ev.max_residual <= 1e-9 and im.max_residual <= 1e-9
     assert ev.energy_identity.relative_difference <= 1e-9
     # implicit (3000 steps, on the sample breakpoints) vs exact events: measured 1.3e-5
@@ -395,6 +399,8 @@ def test_load_factor_exactly_at_lam1_and_lam2():
         for method in ("implicit", "events"):
             r = sd.solve_cycles(s, load, b.lam2, initial_slip=v0, steps_per_cycle=64,
                                 max_cycles=400, method=method)
+            # at lam2 the steps are degenerate (a constraint is tight): 10 x FEAS_TOL allowed,
+            # the Lemke fallback's acceptance threshold
             assert r.status == "periodic" and r.max_residual <= 1e-8
             if r.shook_down:
                 # the only safe state left.  The approach to it is geometric and the run stops once

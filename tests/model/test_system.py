@@ -65,6 +65,7 @@ def test_is_coupled():
 def test_single_node_critical_friction():
     s = sd.DiscreteSystem([[2.0]], [[0.5]], [[3.0]], friction=0.4)
     cf = s.critical_friction()
+    # closed form A / (|B| f): one division, exact to round-off
     assert cf.exact and cf.factor == pytest.approx(2.0 / 0.5 / 0.4, rel=1e-12)
     assert cf.value == pytest.approx(2.0 / 0.5, rel=1e-12)
 
