@@ -146,7 +146,7 @@ def test_isolated_crack_dissipation_on_max_shear_plane():
     load = m.load_cycle((-1, 0, -1), (0, 1, 0))
     k = m.system.A[0, 0]
     # neglected interaction ~ (a / d)^2 = 4e-8 relative at most: rtol 1e-8 on the diagonal
-    # (whose neighbour term is second order, ~1e-16) and on W* below (measured 1e-16)
+    # (whose neighbour term is second order, ~1e-16) and on W* below (the same relative error)
     np.testing.assert_allclose(np.diag(m.system.A), m.self_stiffness, rtol=1e-8)
     abar = 1.5
     for lam in (0.8, 1.3):
