@@ -164,6 +164,15 @@ def test_lam2_and_activity_intervals_against_linprog_on_the_hand_assembly(n, see
     lo = np.array([lp_lam(G, c, m, +1, k) for k in range(2 * n)])
     np.testing.assert_allclose(b.lam_high, hi, rtol=1e-6, atol=1e-9)
     np.testing.assert_allclose(b.lam_low, lo, rtol=1e-6, atol=1e-9)
+    if n <= 3:  # and by vertex enumeration of {(v, lam)} on the hand assembly (no LP at all)
+        from types import SimpleNamespace
+
+        from test_bounds import brute_force
+
+        lam2_v, lo_v, hi_v = brute_force(SimpleNamespace(n_nodes=n, G=G, c=c, m=m))
+        assert b.lam2 == pytest.approx(lam2_v, rel=1e-8)
+        np.testing.assert_allclose(b.lam_high, hi_v, rtol=1e-8, atol=1e-12)
+        np.testing.assert_allclose(b.lam_low, lo_v, rtol=1e-8, atol=1e-12)
     # lam1 from the intervals (MODEL.md s.3 definition), if every constraint is active at 0
     if np.all(lo <= 1e-9):
         lam1 = min(np.nanmin(hi), b.lam2)
