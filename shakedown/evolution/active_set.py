@@ -36,6 +36,30 @@ class ActiveSet:
         mag = cand[np.arange(n), target]
         return mag, target
 
+    def _violations_step(self, s, z, q, p, ft, dtol):
+        """:meth:`_violations` of the step problem (every state allowed, no node held), with
+        one (4, N) array and no per-state masks: ``None`` when no sign is violated."""
+        n = self.n
+        fp = self.f * p
+        cand = np.empty((4, n))
+        np.divide(p, -ft, out=cand[SEPARATED])
+        np.add(fp, q, out=cand[FORWARD])
+        cand[FORWARD] /= -ft
+        np.subtract(q, fp, out=cand[BACKWARD])
+        cand[BACKWARD] /= ft
+        np.divide(z[:n], dtol[:n], out=cand[STICK])
+        isS = s == STICK
+        isO = s == SEPARATED
+        cand[STICK][s == FORWARD] *= -1.0
+        cand[STICK][isO] = -z[n:][isO] / dtol[n:][isO]
+        cand[STICK][isS] = -np.inf
+        cand[FORWARD:SEPARATED, ~isS] = -np.inf
+        cand[SEPARATED][isO] = -np.inf
+        if cand.max() <= 1.0:
+            return None
+        target = np.argmax(cand, axis=0).astype(np.int8)
+        return cand[target, np.arange(n)], target
+
     def residuals(self, z, q, p, allowed, forced, scale):
         """Natural complementarity residual of an answer (dimensionless; see StepResult).
 
@@ -73,16 +97,18 @@ class ActiveSet:
         held in that state with no sign check: the interior nodes of a rate problem).
         """
         n = self.n
-        allowed = np.ones((n, 4), bool) if allowed is None else np.asarray(allowed, bool)
-        forced = allowed.sum(axis=1) == 1
+        step = allowed is None
+        allowed = self._all_allowed if step else np.asarray(allowed, bool)
+        forced = self._none_forced if step else allowed.sum(axis=1) == 1
         if scale is None:
             scale = float(max(np.abs(q0).max(initial=0), np.abs(p0).max(initial=0)))
         scale = scale if scale > 0 else 1.0
         ft = self.feas_tol * scale
         dtol = ft / self.diag
         s = np.zeros(n, np.int8) if guess is None else np.array(guess, np.int8)
-        bad = ~allowed[np.arange(n), s]
-        s[bad] = np.argmax(allowed[bad], axis=1)
+        if not step:
+            bad = ~allowed[np.arange(n), s]
+            s[bad] = np.argmax(allowed[bad], axis=1)
         self._counters = dict(factorizations=0, updates=0, cache_hits=0)
         visited = set()
         single = False
@@ -98,12 +124,18 @@ class ActiveSet:
             z = self._solve_set(s, q0, p0, scale)
             if z is None:
                 break
-            q, p = self._reactions(z, q0, p0)
-            mag, target = self._violations(s, z, q, p, allowed, forced, ft, dtol)
-            if mag.max(initial=-np.inf) <= 1.0:
+            q, p = self._reactions(z, q0, p0, self._last_factor)
+            if step:
+                viol = self._violations_step(s, z, q, p, ft, dtol)
+            else:
+                viol = self._violations(s, z, q, p, allowed, forced, ft, dtol)
+                if viol[0].max(initial=-np.inf) <= 1.0:
+                    viol = None
+            if viol is None:
                 self._remember(s, key)
                 self.totals["iterations"] += it
                 return MixedSolution(s, z, q, p, True, "active_set", it, 0, self._counters)
+            mag, target = viol
             idx = np.flatnonzero(mag > 1.0) if not single else [int(np.argmax(mag))]
             s = s.copy()
             s[idx] = target[idx]

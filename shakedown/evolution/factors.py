@@ -151,6 +151,7 @@ class FactorCache:
     def _solve_set(self, s, q0, p0, scale):
         """``z = (dv, w)`` of assignment ``s``; ``None`` if its matrix is singular."""
         n = self.n
+        self._last_factor = None
         if not np.any(s != STICK):
             return np.zeros(2 * n)
         key = s.tobytes()
@@ -160,10 +161,7 @@ class FactorCache:
             self.totals["cache_hits"] += 1
             self._counters["cache_hits"] += 1
             self._base = F
-            z = np.zeros(2 * n)
-            z[F.free] = sla.lu_solve(F.lu, self._rhs(F.coef, F.jv, F.jw, q0, p0),
-                                     check_finite=False)
-            return z
+            return self._lu_solve(F, q0, p0)
         B0 = self._base
         if (B0 is not None and B0.free.size >= self.update_min_size
                 and np.count_nonzero(s != B0.s) <= self.max_update_rank):
@@ -173,9 +171,17 @@ class FactorCache:
         F = self._factor(s, key)
         if F is None:
             return None
-        z = np.zeros(2 * n)
-        z[F.free] = sla.lu_solve(F.lu, self._rhs(F.coef, F.jv, F.jw, q0, p0),
-                                 check_finite=False)
+        return self._lu_solve(F, q0, p0)
+
+    def _lu_solve(self, F, q0, p0):
+        """``z`` of the cached assignment ``F`` by one pair of triangular solves (LAPACK getrs
+        called directly: the factors and right-hand side are finite by construction, checked
+        once when ``F`` was factorized, so scipy's per-call checks are skipped)."""
+        z = np.zeros(2 * self.n)
+        x, info = self._getrs(F.lu[0], F.lu[1], self._rhs(F.coef, F.jv, F.jw, q0, p0),
+                              overwrite_b=True)
+        z[F.free] = x
+        self._last_factor = F
         return z
 
     def _remember(self, s, key):
@@ -205,13 +211,27 @@ class FactorCache:
         err = max(np.abs(q[a] + c[a] * p[a]).max(initial=0.0), np.abs(p[b]).max(initial=0.0))
         return err <= 1e-3 * self.feas_tol * scale
 
-    def _reactions(self, z, q0, p0):
+    def _reactions(self, z, q0, p0, F=None):
+        """``(q, p) = (q0, p0) + K z``.
+
+        ``F``: the cached factor that produced ``z`` (its support is ``F.free``); its rows
+        ``K[F.free]`` are kept with the factor (counted in the cache budget) so that a warm step
+        costs one matrix-vector product with them and no gather.  Otherwise the rows of the
+        non-zero entries are gathered (``K`` is symmetric: rows instead of strided columns).
+        """
         n = self.n
-        iv = np.flatnonzero(z[:n])
-        iw = np.flatnonzero(z[n:])
-        if iv.size + iw.size > n // 4:  # dense products beat column gathers
-            zv, zw = z[:n], z[n:]
-            return q0 + self.A @ zv + self.B @ zw, p0 + self.Bt @ zv + self.C @ zw
-        q = q0 + self.A[:, iv] @ z[iv] + self.B[:, iw] @ z[n + iw]
-        p = p0 + self.Bt[:, iv] @ z[iv] + self.C[:, iw] @ z[n + iw]
-        return q, p
+        if F is not None:
+            kr = F.krows
+            if kr is None:
+                kr = self.K[F.free]
+                if self._cache_used + kr.nbytes <= self.cache_bytes and F.key in self._cache:
+                    F.krows = kr
+                    F.nbytes += kr.nbytes
+                    self._cache_used += kr.nbytes
+            r = z[F.free] @ kr
+        else:
+            idx = np.flatnonzero(z)
+            if not idx.size:
+                return q0.copy(), p0.copy()
+            r = z[idx] @ self.K[idx] if idx.size < n else self.K @ z
+        return q0 + r[:n], p0 + r[n:]

@@ -108,6 +108,7 @@ class _Factor:
     jw: np.ndarray  # nodes with a gap unknown
     lu: tuple
     nbytes: int
+    krows: np.ndarray | None = None  # K[free], shape (m, 2N): reactions of a solve, lazily
 
 
 @dataclass
