@@ -25,20 +25,11 @@ class FactorCache:
     # ------------------------------------------------------------------ K blocks
     def _Kq(self, rows, cols):
         """Rows ``rows`` of ``dq/dz`` (``z = (dv, w)``), columns ``cols`` (indices into z)."""
-        n = self.n
-        out = np.empty((len(rows), len(cols)))
-        mv = cols < n
-        out[:, mv] = self.A[np.ix_(rows, cols[mv])]
-        out[:, ~mv] = self.B[np.ix_(rows, cols[~mv] - n)]
-        return out
+        return self.K[np.ix_(rows, cols)]
 
     def _Kp(self, rows, cols):
-        n = self.n
-        out = np.empty((len(rows), len(cols)))
-        mv = cols < n
-        out[:, mv] = self.Bt[np.ix_(rows, cols[mv])]
-        out[:, ~mv] = self.C[np.ix_(rows, cols[~mv] - n)]
-        return out
+        """Rows ``rows`` of ``dp/dz``, columns ``cols``."""
+        return self.K[np.ix_(self.n + np.asarray(rows, int), cols)]
 
     def _layout(self, s):
         """Free unknowns (indices into z) and the row coefficients of assignment ``s``."""
@@ -51,8 +42,11 @@ class FactorCache:
 
     def _G_rows(self, s, free, coef, jv, jw, cols):
         """Rows of the assignment's equations (a-rows ``q + c p``, b-rows ``p``) at ``cols``."""
-        top = self._Kq(jv, cols) + coef[:, None] * self._Kp(jv, cols)
-        return np.vstack([top, self._Kp(jw, cols)])
+        n = self.n
+        out = self.K.take(np.concatenate([jv, n + jw, n + jv]), axis=0).take(cols, axis=1)
+        m = jv.size + jw.size
+        out[:jv.size] += coef[:, None] * out[m:]
+        return out[:m]
 
     def _rhs(self, coef, jv, jw, q0, p0):
         return -np.concatenate([q0[jv] + coef * p0[jv], p0[jw]])
