@@ -13,8 +13,6 @@ largest change of a reaction a node's own stiffness would produce, relative to t
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 
 from ..model.errors import InputError
@@ -23,13 +21,11 @@ from ..model.system import DiscreteSystem
 from ..model.validation import check_load_factor, check_same_nodes
 from .complementarity import (
     FEAS_TOL,
-    SEPARATED,
-    STICK,
     StepSolver,
     _vec,
 )
-from .cycle_results import SHAKEDOWN_FACTOR, CycleRun, EnergyIdentity, _finish
-from .events import CycleRecord, EventIntegrator
+from .cycle_results import SHAKEDOWN_FACTOR, CycleRun, EnergyIdentity
+from .multistate import run_states
 
 
 def _check_inputs(system, load, lam, initial_slip, initial_gap, method, steps_per_cycle,
@@ -54,9 +50,28 @@ def _check_inputs(system, load, lam, initial_slip, initial_gap, method, steps_pe
         raise InputError(f"tol must be a positive number; got {tol!r}") from exc
     if not (np.isfinite(tol) and tol > 0):
         raise InputError(f"tol must be a positive number (e.g. 1e-10); got {tol}")
-    v0 = np.zeros(n) if initial_slip is None else _vec("initial_slip", initial_slip, n)
-    w0 = np.zeros(n) if initial_gap is None else _vec("initial_gap", initial_gap, n, nonneg=True)
-    return lam, v0, w0, int(steps_per_cycle), int(max_cycles), tol
+    batch = initial_slip is not None and np.ndim(initial_slip) == 2
+    if batch:
+        rows = list(initial_slip)
+        if not rows:
+            raise InputError("initial_slip with shape (n_states, N) needs n_states >= 1; "
+                             "got 0 rows")
+        V0 = np.array([_vec(f"initial_slip[{i}]", v, n) for i, v in enumerate(rows)])
+    else:
+        V0 = (np.zeros(n) if initial_slip is None else _vec("initial_slip", initial_slip, n))
+        V0 = V0[None, :]
+    k = V0.shape[0]
+    if initial_gap is None or np.ndim(initial_gap) == 1:
+        w0 = (np.zeros(n) if initial_gap is None
+              else _vec("initial_gap", initial_gap, n, nonneg=True))
+        W0 = np.repeat(w0[None, :], k, axis=0)
+    elif batch and np.shape(initial_gap) == (k, n):
+        W0 = np.array([_vec(f"initial_gap[{i}]", g, n, nonneg=True)
+                       for i, g in enumerate(initial_gap)])
+    else:
+        raise InputError(f"initial_gap must have shape ({n},) or, with initial_slip of shape "
+                         f"({k}, {n}), ({k}, {n}); got {np.shape(initial_gap)}")
+    return lam, V0, W0, int(steps_per_cycle), int(max_cycles), tol, batch
 
 
 def _state_change(D, F, v1, w1, v0, w0):
@@ -77,9 +92,13 @@ def solve_cycles(system: DiscreteSystem, load: LoadCycle, lam: float, initial_sl
     load : LoadCycle
     lam : float
         Load factor (``>= 0``).
-    initial_slip : array_like, shape (N,), optional
-        Slips at ``t = 0`` (zeros by default) [length].
-    initial_gap : array_like, shape (N,), optional
+    initial_slip : array_like, shape (N,) or (n_states, N), optional
+        Slips at ``t = 0`` (zeros by default) [length].  With shape (n_states, N) the states
+        are run together (:mod:`shakedown.evolution.multistate`: one solver, one factor
+        cache, states sharing an active set solved by one multi-right-hand-side solve) and a
+        list of ``n_states`` CycleRun is returned; each equals an independent run to the
+        solver tolerance.
+    initial_gap : array_like, shape (N,) or (n_states, N), optional
         Gaps at ``t = 0`` (zeros by default, ``>= 0``).  The step problem does not depend on the
         previous gap: it only seeds which nodes start separated.
     method : {"implicit", "events"}
@@ -108,7 +127,7 @@ def solve_cycles(system: DiscreteSystem, load: LoadCycle, lam: float, initial_sl
 
     Returns
     -------
-    CycleRun
+    CycleRun, or list of CycleRun for a 2-D ``initial_slip``
 
     Examples
     --------
@@ -119,138 +138,15 @@ def solve_cycles(system: DiscreteSystem, load: LoadCycle, lam: float, initial_sl
     >>> run.period, round(run.steady_dissipation, 12)   # 4 f P (lam Q1 - f P) / k
     (1, 1.0)
     """
-    lam, v0, w0, n_steps, max_cycles, tol = _check_inputs(
+    lam, V0, W0, n_steps, max_cycles, tol, batch = _check_inputs(
         system, load, lam, initial_slip, initial_gap, method, steps_per_cycle, max_cycles, tol)
     if solver is None:
         solver = StepSolver(system) if feas_tol is None else StepSolver(system, feas_tol=feas_tol)
     elif solver.system is not system:
         raise InputError("solver was built for another system; pass solver=None")
-    t_start = time.perf_counter()
-    totals0 = dict(solver.totals)
-    note = ""
-    if method == "events" and load.kind != "samples":
-        load = load.to_samples(n_steps)
-        note = (f"harmonic load replaced by its piecewise-linear interpolant through "
-                f"{n_steps} samples (load.to_samples); ")
-    grid = (np.arange(1, n_steps + 1) / n_steps if method == "implicit"
-            else np.arange(load.n_samples) / load.n_samples)
-    qg, pg = load.evaluate(grid, lam)
-    F = float(max(np.abs(qg).max(), np.abs(pg).max()))
-    F = F if F > 0 else 1.0
-    D = solver.diag
-    dtol = solver.feas_tol * F / D
-
-    step_statuses: dict[str, int] = {}
-    max_res = 0.0
-    ok, fail_msg = True, ""
-    v, w = v0.copy(), w0.copy()
-    prev_states = np.where(w0 > 0, SEPARATED, STICK).astype(np.int8)
-    guess = prev_states.copy()
-    W_jump = 0.0
-    integrator = None
-    if method == "events":
-        integrator = EventIntegrator(solver, load, lam, F)
-        q_w0, p_w0 = load.evaluate(0.0, lam)
-        r = solver.solve(v, q_w0, p_w0, guess)
-        step_statuses[r.status] = step_statuses.get(r.status, 0) + 1
-        max_res = r.residual
-        if not r.success:
-            ok, fail_msg = False, f"no verified equilibrium at t = 0: {r.message}"
-        else:
-            W_jump = float(-(r.q @ r.slip_increment))
-            v, w, guess = r.slip, r.gap, r.active_set
-    else:
-        qw_steps, pw_steps = qg, pg
-
-    starts_v, starts_w = [v0.copy()], [w0.copy()]
-    if method == "events" and ok:
-        starts_v[0], starts_w[0] = v.copy(), w.copy()
-    W_list, change = [], []
-    records: list[CycleRecord] = []
-    history = [] if record_history else None
-    period = 0
-    c = 0
-    while ok and c < max_cycles:
-        c += 1
-        if method == "implicit":
-            rec = _implicit_cycle(solver, c, v, w, prev_states, guess, qw_steps, pw_steps,
-                                  load, lam, step_statuses)
-        else:
-            rec = integrator.cycle(c, v, w, prev_states, guess)
-        max_res = max(max_res, rec.max_residual)
-        if not rec.ok:
-            ok, fail_msg = False, rec.message
-            break
-        records = (records + [rec])[-2:]
-        if history is not None:
-            history.append(rec)
-        v, w = rec.v[-1].copy(), rec.w[-1].copy()
-        prev_states = rec.states[-1]
-        guess = rec.active_sets[-1] if rec.active_sets.ndim == 2 else rec.active_sets
-        W_list.append(rec.dissipation + (W_jump if c == 1 else 0.0))
-        change.append(_state_change(D, F, v, w, starts_v[-1], starts_w[-1]))
-        starts_v.append(v.copy())
-        starts_w.append(w.copy())
-        if progress is not None:
-            progress(c, max_cycles, rec.dissipation)
-        if change[-1] <= tol:
-            period = 1
-            break
-        if c >= 2 and _state_change(D, F, v, w, starts_v[-3], starts_w[-3]) <= tol:
-            period = 2
-            break
-
-    return _finish(system, solver, load, lam, method, n_steps, tol, F, dtol, records, history,
-                   period, W_list, change, starts_v, starts_w, v, w, ok, fail_msg, note,
-                   step_statuses, max_res, totals0, t_start, integrator, max_cycles)
-
-
-def _implicit_cycle(solver, c, v, w, prev_states, guess, qw, pw, load, lam, step_statuses):
-    n_steps, n = qw.shape
-    V = np.empty((n_steps + 1, n))
-    Wg, Q, P = np.empty_like(V), np.empty_like(V), np.empty_like(V)
-    st = np.empty((n_steps + 1, n), np.int8)
-    act = np.empty((n_steps, n), np.int8)
-    q0w, p0w = load.evaluate(0.0, lam)
-    V[0], Wg[0] = v, w
-    Q[0], P[0] = q0w + solver.A @ v + solver.B @ w, p0w + solver.Bt @ v + solver.C @ w
-    st[0] = prev_states
-    W = 0.0
-    worst = 0.0
-    scales = np.empty(n_steps)
-    base = None  # the first step of a period computes its base from scratch
-    for k in range(n_steps):
-        r = solver.solve(v, qw[k], pw[k], guess, base=base, verify=False)
-        step_statuses[r.status] = step_statuses.get(r.status, 0) + 1
-        worst = max(worst, r.residual)
-        if not r.success:
-            rec = CycleRecord(np.zeros(0), V[:k + 1], Wg[:k + 1], Q[:k + 1], P[:k + 1],
-                              st[:k + 1], W, ok=False, max_residual=worst,
-                              message=f"step {k + 1} of period {c} (t = "
-                              f"{c - 1 + (k + 1) / n_steps:.6g}): {r.status}: {r.message}")
-            return rec
-        W -= float(r.q @ r.slip_increment)
-        v, guess = r.slip, r.active_set
-        V[k + 1], Wg[k + 1], Q[k + 1], P[k + 1] = r.slip, r.gap, r.q, r.p
-        st[k + 1] = r.states
-        act[k] = r.active_set
-        scales[k] = r.force_scale
-        if k + 1 < n_steps:
-            base = solver.next_base(r.q, r.p, r.gap, qw[k + 1] - qw[k], pw[k + 1] - pw[k])
-    # every step's equilibrium (q, p) = r_w + K (v, w), checked independently for the whole
-    # period by one matrix-matrix product (BLAS-3) instead of a matrix-vector product per step
-    U = np.hstack([V[1:], Wg[1:]])
-    E = np.hstack([qw - Q[1:], pw - P[1:]]) + U @ solver.K
-    eq = np.abs(E).max(axis=1) / scales
-    worst = max(worst, float(eq.max()))
-    if not worst <= 10 * solver.feas_tol:
-        k = int(np.argmax(eq))
-        return CycleRecord(np.zeros(0), V, Wg, Q, P, st, W, ok=False, max_residual=worst,
-                           message=f"step {k + 1} of period {c}: equilibrium residual "
-                           f"{eq[k]:.3g} > {10 * solver.feas_tol:g} (recomputed with K)")
-    t = c - 1 + np.arange(n_steps + 1) / n_steps
-    return CycleRecord(t, V, Wg, Q, P, st, W, active_sets=act, n_steps=n_steps,
-                       max_residual=worst)
+    runs = run_states(system, solver, load, lam, V0, W0, method, n_steps, max_cycles, tol,
+                      progress=progress, record_history=record_history)
+    return runs if batch else runs[0]
 
 
 __all__ = ["solve_cycles", "CycleRun", "EnergyIdentity", "FEAS_TOL", "SHAKEDOWN_FACTOR"]
