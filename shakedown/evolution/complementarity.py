@@ -109,6 +109,7 @@ class StepSolver(FactorCache, ActiveSet, Fallbacks):
         self._last_factor = None
         self._all_allowed = np.ones((n, 4), bool)
         self._none_forced = np.zeros(n, bool)
+        self._counters = dict(factorizations=0, updates=0, cache_hits=0)
         self.feas_tol = float(feas_tol)
         self.max_iter = 2 * n + 20 if max_iter is None else int(max_iter)
         self.cache_bytes = float(cache_bytes)
