@@ -57,12 +57,12 @@ def test_warm_steps_equal_fresh_solver_and_lemke(seed):
     guess, base = None, None
     changed_max = 0
     steps = 24
-    prev_q = None
+    prev_q = r = None
     for _ in range(2):
         for k in range(steps):
             t = (k + 1) / steps
             q_w = q_a * np.sign(np.cos(2 * np.pi * t)) * (0.2 + abs(np.cos(2 * np.pi * t)))
-            if prev_q is not None:
+            if r is not None:
                 base = warm.next_base(r.q, r.p, r.gap, q_w - prev_q, 0.0 * p_w)
             r = warm.solve(v, q_w, p_w, guess, base=base)
             cold = StepSolver(s).solve(v, q_w, p_w)
