@@ -209,4 +209,5 @@ def kachanov_model(
     )
     if validate:
         model.system  # noqa: B018  (raises on indefinite K or bad friction)
+    cracks.warn_if_close(stacklevel=3)  # Kachanov's error is large for close pairs
     return model

@@ -12,12 +12,14 @@ from importlib import import_module as _import_module
 
 from .model.errors import (
     InputError,
+    MissingDependencyError,
     NotPositiveDefiniteError,
     NotSymmetricError,
     SceneError,
     ShakedownError,
     ShapeError,
     SolverError,
+    UnsafePathError,
 )
 from .model.loading import LoadCycle
 from .model.system import CriticalFriction, DiscreteSystem
@@ -113,11 +115,13 @@ __all__ = [
     "CriticalFriction",
     "LoadCycle",
     "InputError",
+    "MissingDependencyError",
     "ShapeError",
     "NotSymmetricError",
     "NotPositiveDefiniteError",
     "SceneError",
     "ShakedownError",
     "SolverError",
+    "UnsafePathError",
     *_LAZY,
 ]

@@ -327,6 +327,12 @@ class ShakedownBounds:
             "n_nodes": int(self.n_nodes),
         }
 
+    def verdict(self) -> str:
+        """The answer in plain sentences, numbers rounded for reading (:mod:`.verdict`)."""
+        from .verdict import bounds_verdict
+
+        return bounds_verdict(self)
+
     def summary(self) -> str:
         """A readable multi-line summary."""
         d = self.to_dict()

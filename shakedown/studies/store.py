@@ -49,7 +49,8 @@ import numpy as np
 import pandas as pd
 
 from ..model import citations
-from ..model.errors import InputError, SolverError
+from ..model.errors import InputError, MissingDependencyError, SolverError
+from ..model.progress import progress_bar
 
 #: Name of the column holding each row's task key.
 KEY = "task_key"
@@ -424,7 +425,12 @@ class Workers:
         self._pool = self._client = None
         self._own_client = False
         if scheduler is not None:
-            import distributed
+            try:
+                import distributed
+            except ImportError as exc:  # Dask is the one optional extra (issue 9)
+                raise MissingDependencyError(
+                    f"scheduler = {scheduler!r} needs Dask: pip install \"shakedown[parallel]\""
+                ) from exc
 
             self._distributed = distributed
             if isinstance(scheduler, distributed.Client):
@@ -603,7 +609,7 @@ def run_tasks(
 def _execute(todo, st, backend, progress, desc, on_error, max_in_flight, flush_interval,
              n_total, n_resumed, failed):
     window = max_in_flight or (1 if backend.kind == "inline" else 2 * backend.slots)
-    bar = Progress(n_total, n_resumed, desc) if progress else None
+    bar = progress_bar(n_total, desc=desc, initial=n_resumed, unit="task") if progress else None
     buffer: list[dict] = []
     last_flush = time.perf_counter()
     pending: dict = {}

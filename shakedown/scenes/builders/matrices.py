@@ -84,6 +84,16 @@ def _container(path: Path, table: str, names: dict) -> dict:
 
 
 def _array(table, key, value):
+    bad = _not_a_number(value)
+    if bad is not None:
+        if isinstance(bad, str):
+            what, fix = f"the text {bad!r}", f"write {bad} without quotes"
+        else:
+            what, fix = f"the boolean {str(bad).lower()}", "write a number such as 0.7"
+        raise SceneError(
+            f"[{table}] key {key!r} must be a number or a (nested) list of numbers; got "
+            f"{what}, which is not a number ({fix})"
+        )
     try:
         arr = np.array(value, dtype=float)
     except (TypeError, ValueError):
@@ -91,6 +101,18 @@ def _array(table, key, value):
             f"[{table}] key {key!r} = {value!r} must be a number or a (nested) list of numbers"
         ) from None
     return arr
+
+
+def _not_a_number(value):
+    """The first string or boolean inside ``value`` (TOML lists may nest), else None."""
+    if isinstance(value, (str, bool)):
+        return value
+    if isinstance(value, (list, tuple)):
+        for v in value:
+            bad = _not_a_number(v)
+            if bad is not None:
+                return bad
+    return None
 
 
 def _split(K: np.ndarray, where: str) -> dict:
@@ -254,6 +276,11 @@ def _reactions(load: dict, scene_dir: Path, n: int, names: dict) -> LoadCycle:
     for key in ("q0", "p0"):
         if key not in data:
             raise SceneError(f"[load] key {key!r} is missing (a list of {n} numbers)")
+        if data[key].shape != (n,):
+            raise SceneError(
+                f"[load] key {key!r} must list one value per node ({n} nodes); got "
+                f"{data[key].tolist()!r} (shape {data[key].shape})"
+            )
     harm = [k for k in HARMONIC_KEYS if k in data]
     samp = [k for k in SAMPLE_KEYS if k in data]
     if harm and samp:
