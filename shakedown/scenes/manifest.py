@@ -229,6 +229,8 @@ class RunRecord:
             "resolved_scene_file": "scene.resolved.toml",
             "resolved_scene": self.tables,
             "seeds": _seeds({k: self.tables[k] for k in ("model", "load", "analyses")}),
+            "input_notes": (builder.provenance(self.tables["model"], self.tables["load"])
+                            if hasattr(builder, "provenance") else {}),
             "input_files": inputs,
             "dependencies": dependency_versions(),
             "machine": machine(),

@@ -34,7 +34,7 @@ def _built(name):
 
 
 # ---------------------------------------------------------------- reduced stiffness files
-@pytest.mark.parametrize("scene", ["two_node_mtx", "two_node_csv", "two_node_mat"])
+@pytest.mark.parametrize("scene", ["two_node_mtx", "two_node_csv", "two_node_mat", "two_node_npz"])
 def test_reduced_stiffness_files_give_the_builtin_system(scene):
     ref, ref_load, _ = build(load_scene("two_node_coupled"))
     system, load, _ = _built(scene)

@@ -130,6 +130,15 @@ def test_manifest_refuses_a_changed_input_file(tmp_path, capsys):
     assert "two_node_K.mtx has changed since the recorded run" in err
 
 
+def test_manifest_states_the_resampling_error_of_a_load_record(tmp_path):
+    out = tmp_path / "rec"
+    scene = ROOT / "data" / "scenes" / "two_node_record.toml"
+    assert main(["bounds", str(scene), "-q", "-o", str(out)]) == 0
+    notes = json.loads((out / "manifest.json").read_text())["input_notes"]
+    assert "resampled to 256 samples" in notes["load_record"]
+    assert 0 <= notes["load_record_relative_error"] < 0.01  # the scene's max_error
+
+
 def test_a_file_that_is_not_a_manifest_is_refused(tmp_path, capsys):
     p = tmp_path / "x.json"
     p.write_text('{"a": 1}')

@@ -307,3 +307,18 @@ def resolved(model: dict, load: dict) -> tuple[dict, dict]:
         ld.setdefault("n_samples", 256)
         ld.setdefault("max_error", 1e-2)
     return m, ld
+
+
+def provenance(model: dict, load: dict) -> dict:
+    """What the manifest states about the inputs: the resampling error of a load record.
+
+    ``model`` and ``load`` are the resolved tables (absolute file paths).
+    """
+    if "record_file" not in load or "period" not in load:
+        return {}
+    kw = {k: load[k] for k in ("n_samples", "t_start") if k in load}
+    try:
+        _, fit = read_load_record(load["record_file"], load["period"], max_error=float("inf"), **kw)
+    except InputError:
+        return {}  # the build reports it
+    return {"load_record": fit.message(), "load_record_relative_error": fit.relative_error}
