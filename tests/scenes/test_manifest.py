@@ -149,7 +149,8 @@ def test_a_file_that_is_not_a_manifest_is_refused(tmp_path, capsys):
 _scalars = st.one_of(
     st.booleans(), st.integers(-2**63, 2**63 - 1), st.text(max_size=12),
     st.floats(allow_nan=False), st.floats(min_value=-1e-300, max_value=1e-300))
-_values = st.recursive(_scalars, lambda inner: st.lists(inner, max_size=4), max_leaves=12)
+_values = st.one_of(_scalars, st.lists(st.one_of(_scalars, st.lists(_scalars, max_size=4)),
+                                      max_size=4))
 _tables_st = st.dictionaries(st.text(min_size=1, max_size=8), _values, max_size=5)
 
 
