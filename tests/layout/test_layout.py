@@ -36,7 +36,7 @@ LONG_REASON = "one coherent algorithm"
 #: bounds engine, step solver, studies).  This set only shrinks.
 PENDING_SPLIT = {
     "shakedown.bounds.dense_lp", "shakedown.bounds.engine", "shakedown.evolution.complementarity",
-    "shakedown.evolution.cycles", "shakedown.evolution.steady", "shakedown.studies.store",
+    "shakedown.evolution.cycles", "shakedown.evolution.steady",
     "shakedown.studies.sweep", "shakedown.models.fe.meshes",
 }
 

@@ -107,17 +107,25 @@ def test_parquet_store_ignores_and_clears_debris_of_a_killed_write(tmp_path):
         assert not list((tmp_path / "s").glob(".tmp-*"))
 
 
-def test_store_lock_refuses_a_live_writer_and_takes_over_a_dead_one(tmp_path):
+def test_store_lock_refuses_a_live_writer_and_takes_over_a_killed_one(tmp_path):
+    """The lock is an OS lock (filelock): held while its process lives, gone when it dies,
+    even by SIGKILL, so a killed sweep never blocks the next run."""
     st = ParquetStore(tmp_path / "s")
-    (tmp_path / "s" / ".lock").write_text("1")  # pid 1 is always alive
-    with pytest.raises(InputError, match="in use by process 1"), st:
-        pass
-    dead = subprocess.Popen([sys.executable, "-c", "pass"])
-    dead.wait()
-    (tmp_path / "s" / ".lock").write_text(str(dead.pid))
+    code = ("import sys, time; from shakedown.studies.tables import ParquetStore\n"
+            f"st = ParquetStore({str(tmp_path / 's')!r}); st.__enter__()\n"
+            "print('locked', flush=True); time.sleep(60)")
+    holder = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True,
+                              env={**os.environ, "PYTHONPATH": str(HERE.parents[1])})
+    try:
+        assert holder.stdout.readline().strip() == "locked"
+        with pytest.raises(InputError, match="in use by another process"), st:
+            pass
+    finally:
+        holder.kill()
+        holder.wait()
     with st:
         st.append([dict(task_key="a")])
-    assert not (tmp_path / "s" / ".lock").exists()
+    assert st.keys() == {"a"}
 
 
 def test_rows_without_key_are_refused(tmp_path):
