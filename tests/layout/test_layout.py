@@ -37,7 +37,7 @@ LONG_REASON = "one coherent algorithm"
 PENDING_SPLIT = {
     "shakedown.bounds.dense_lp", "shakedown.bounds.engine", "shakedown.evolution.complementarity",
     "shakedown.evolution.cycles", "shakedown.evolution.steady",
-    "shakedown.studies.sweep", "shakedown.models.fe.meshes",
+    "shakedown.models.fe.meshes",
 }
 
 
