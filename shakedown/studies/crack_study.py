@@ -84,6 +84,18 @@ def _realisation_task(spec: SweepSpec, r: int) -> dict:
                 build_seconds=t1 - t0, bounds_seconds=time.perf_counter() - t1)
 
 
+@lru_cache(maxsize=2)
+def _states(spec: SweepSpec, r: int, safe_state: str) -> np.ndarray:
+    """The initial states of realisation ``r`` (the same at every load factor; a pure
+    function of its arguments, so caching it per process keeps results bit-identical)."""
+    _, model, load = realisation_model(spec, r)
+    safe = np.array(json.loads(safe_state), float) if safe_state else None
+    out = initial_states(model.system, load, spec.n_states, (spec.seed, r, 1), safe_state=safe,
+                         scale=spec.state_scale)
+    out.setflags(write=False)
+    return out
+
+
 def _point_task(spec: SweepSpec, r: int, point: str, lam: float, lam2: float,
                 safe_state: str) -> list[dict]:
     """Every initial state at one (realisation, load factor), with one step solver."""
@@ -91,9 +103,7 @@ def _point_task(spec: SweepSpec, r: int, point: str, lam: float, lam2: float,
 
     _, model, load = realisation_model(spec, r)
     system = model.system
-    safe = np.array(json.loads(safe_state), float) if safe_state else None
-    states = initial_states(system, load, spec.n_states, (spec.seed, r, 1), safe_state=safe,
-                            scale=spec.state_scale)
+    states = _states(spec, r, safe_state)
     solver = StepSolver(system)  # shared by the states of this task only: deterministic
     rows = []
     for j, v0 in enumerate(states):

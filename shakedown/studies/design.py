@@ -68,7 +68,9 @@ def _keep_closed(system, p0, v):
 def _corner(system, load, signs):
     """Slip with ``q = s f p`` at every node under the static load: solves
     ``(A - diag(s f) B^T) v = s f p0 - q0`` (MODEL.md s.2: ``q = q0 + A v``, ``p = p0 + B^T v``
-    at ``w = 0``); the uncoupled answer ``(s f p0 - q0) / A_kk`` if that matrix is singular."""
+    at ``w = 0``); the uncoupled answer ``(s f p0 - q0) / A_kk`` if that matrix is singular or
+    the solve does not reproduce the right-hand side to 1e-8 (an ill-conditioned system, e.g.
+    friction near its critical value, where the corner runs off to a huge slip)."""
     f = np.asarray(system.friction, float)
     sf = signs * f
     rhs = sf * load.p0 - load.q0
@@ -77,7 +79,9 @@ def _corner(system, load, signs):
         v = np.linalg.solve(M, rhs)
     except np.linalg.LinAlgError:
         v = None
-    if v is None or not np.all(np.isfinite(v)) or np.linalg.cond(M) > 1e12:
+    scale = np.abs(rhs).max(initial=0.0)
+    if v is None or not np.all(np.isfinite(v)) or \
+            np.abs(M @ v - rhs).max(initial=0.0) > 1e-8 * scale:
         v = rhs / np.diag(system.A)
     return v
 
@@ -138,10 +142,14 @@ def lam_points(lam1: float, lam2: float, lam_adj: float, *, n_lams: int, lam_spa
             pts.append((f"g{i}", float(x * lam2)))
         if np.isfinite(lam1) and lam1 < lam2 and n_band:
             for i, u in enumerate(np.linspace(0.02, 0.98, n_band) if n_band > 1 else [0.5]):
-                pts.append((f"b{i}", float(lam1 + u * (lam2 - lam1))))
+                lam = float(lam1 + u * (lam2 - lam1))
+                if lam1 < lam < lam2:  # a band narrower than rounding has no inside
+                    pts.append((f"b{i}", lam))
         if np.isfinite(lam_adj) and np.isfinite(lam1) and lam_adj < lam1 and n_adj:
             for i in range(n_adj):
-                pts.append((f"a{i}", float(lam_adj + (i + 1) / (n_adj + 1) * (lam1 - lam_adj))))
+                lam = float(lam_adj + (i + 1) / (n_adj + 1) * (lam1 - lam_adj))
+                if lam_adj < lam < lam1:
+                    pts.append((f"a{i}", lam))
     return sorted(pts, key=lambda p: (p[1], p[0]))
 
 

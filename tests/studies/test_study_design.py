@@ -38,16 +38,19 @@ def test_load_factors_sample_the_bands(lam2, r1, ra, n_band, n_adj):
     adj = lam[[n.startswith("a") for n in names]]
     grid = lam[[n.startswith("g") for n in names]]
     np.testing.assert_allclose(grid / lam2, np.linspace(0.5, 2.0, 5), rtol=1e-14)
+    # every point strictly inside its band; all of them unless the band is a few ulps wide
+    wide = (lam2 - lam1) > 1e-13 * lam2
     if lam1 < lam2:
-        assert band.size == n_band
+        assert band.size == n_band or not wide
         assert np.all((band > lam1) & (band < lam2))
-        if n_band > 1:  # near both ends: within 2 % of the band's width
+        if n_band > 1 and wide:  # near both ends: within 2 % of the band's width
             assert band.min() - lam1 <= 0.0201 * (lam2 - lam1)
             assert lam2 - band.max() <= 0.0201 * (lam2 - lam1)
     else:
         assert band.size == 0
     if lam_adj < lam1:
-        assert adj.size == n_adj and np.all((adj > lam_adj) & (adj < lam1))
+        assert adj.size == n_adj or lam1 - lam_adj <= 1e-13 * lam1
+        assert np.all((adj > lam_adj) & (adj < lam1))
     else:
         assert adj.size == 0
 
@@ -88,7 +91,6 @@ def test_bands_equal_student_t_of_scipy_stats():
 @pytest.fixture(scope="module")
 def network():
     import crack_networks as cn
-
     import shakedown as sd
 
     cs = cn.sample_crack_set(15, density=0.1, rng=7)
