@@ -45,7 +45,7 @@ from .spec import _SAMPLER_FIELDS, SweepSpec
 from .tables import KEY, open_store
 from .workers import Workers
 
-__all__ = ["SweepResult", "run_sweep", "realisation_model", "study_tasks"]
+__all__ = ["SweepResult", "lam_grid", "run_sweep", "realisation_model", "study_tasks"]
 
 
 @lru_cache(maxsize=2)
@@ -121,6 +121,13 @@ def _points(spec: SweepSpec, rel: pd.Series) -> list[tuple[str, float]]:
         return [(f"l{i}", float(x)) for i, x in enumerate(spec.lams)]
     return lam_points(rel.lam1, rel.lam2, rel.lam_adj, n_lams=spec.n_lams,
                       lam_span=spec.lam_span, n_band=spec.n_band, n_adj=spec.n_adj)
+
+
+def lam_grid(spec: SweepSpec, realisations: pd.DataFrame) -> np.ndarray:
+    """The first-phase load factors of the study over all realisations, sorted (before the
+    refinement, which depends on the runs)."""
+    lams = [lam for _, rel in realisations.iterrows() for _, lam in _points(spec, rel)]
+    return np.unique(np.asarray(lams, float))
 
 
 def study_tasks(spec: SweepSpec, realisations: pd.DataFrame | None = None,

@@ -22,9 +22,9 @@ import numpy as np
 import pandas as pd
 
 from ..model.errors import InputError
-from .crack_study import SweepResult, realisation_model, run_sweep, study_tasks
+from .crack_study import SweepResult, lam_grid, realisation_model, run_sweep, study_tasks
 from .engine import Task, TaskRun, run_tasks
-from .runs import initial_slips, run_row
+from .runs import initial_slip, initial_slips, run_row
 from .spec import SweepSpec
 from .workers import Workers
 
@@ -35,8 +35,10 @@ __all__ = [
     "Workers",
     "run_tasks",
     "system_sweep",
+    "initial_slip",
     "initial_slips",
     "run_row",
+    "lam_grid",
     "SweepResult",
     "run_sweep",
     "realisation_model",
