@@ -117,7 +117,7 @@ STUDY = textwrap.dedent("""
 
 def _study(R, L, S, workers, store, sched=""):
     code = STUDY.format(spec=SPEC, R=R, L=L, S=S, W=workers, sched=sched)
-    script = Path(store).with_suffix(".py")
+    script = Path(store).with_name(f"run_{Path(store).name}.py")  # not dask.py: it would shadow dask
     script.write_text(code)
     env = {**os.environ, "PYTHONPATH": str(ROOT), "OPENBLAS_NUM_THREADS": "1"}
     out = subprocess.run([sys.executable, str(script), store], env=env, capture_output=True,

@@ -49,8 +49,51 @@ def _mark_bounds(ax, result, axis):
                    label=rf"$\lambda_u$ = {lu.mean():.3g}{mean}: every crack slips")
 
 
+def _zoom_range(result, col):
+    """``(lo, hi)`` around ``lam_adj .. lam2`` on the plotted axis, or None."""
+    r = result.realisations
+    l1, l2, la = (r[c].to_numpy(float) for c in ("lam1", "lam2", "lam_adj"))
+    scale = l2 if col == "x" else np.ones_like(l2)
+    lo = np.fmin(la, l1) / scale
+    hi = l2 / scale
+    ok = np.isfinite(lo) & np.isfinite(hi)
+    if not ok.any():
+        return None
+    lo, hi = lo[ok].min(), hi[ok].max()
+    return lo - 0.1 * (hi - lo), hi + 0.35 * (hi - lo)
+
+
+def _draw_realisations(ax, s, col, alpha, label):
+    for k, (_, g) in enumerate(s.groupby("realisation")):
+        g = g.sort_values("lam")
+        lab = k == 0 and label
+        ax.plot(g[col], g["W_star_max"], "-o", mfc="none", ms=7, color="C0", alpha=alpha,
+                lw=1, label="max over initial states" if lab else None)
+        ax.plot(g[col], g["W_star_min"], "--^", color="C3", alpha=alpha, ms=4, lw=1,
+                label="min over initial states" if lab else None)
+
+
+def _inset(ax, result, col, alpha):
+    """A zoom on ``lam_adj .. lam2`` (the band is a few per cent of the load-factor range)."""
+    rng = _zoom_range(result, col)
+    if rng is None:
+        return
+    s = result.summary
+    sub = s[(s[col] >= rng[0]) & (s[col] <= rng[1])]
+    if len(sub) < 2:
+        return
+    ins = ax.inset_axes([0.42, 0.52, 0.34, 0.38])
+    _draw_realisations(ins, sub, col, alpha, False)
+    _mark_bounds(ins, result, col)
+    ins.set_xlim(*rng)
+    top = float(np.nanmax(sub["W_star_max"].to_numpy(float)))
+    ins.set_ylim(-0.05 * top if top > 0 else -1, 1.1 * top if top > 0 else 1)
+    ins.tick_params(labelsize=6)
+    ins.set_title(r"zoom: $\lambda_{adj}$ .. $\lambda_2$", fontsize=7)
+
+
 def plot_sweep(result, ax=None, *, axis: str = "lam", bands: bool = True,
-               realisations: bool = True):
+               realisations: bool = True, zoom: bool = True):
     """``W*`` against ``lam`` (or ``x = lam / lam2``): min and max over initial states.
 
     One realisation: the maximum (open circles, solid line) and the minimum (filled triangles,
@@ -65,6 +108,8 @@ def plot_sweep(result, ax=None, *, axis: str = "lam", bands: bool = True,
     ax : matplotlib Axes, optional
     axis : {"lam", "x"}
         Load factor, or load factor over each realisation's ``lam2`` (dimensionless).
+    zoom : bool
+        An inset on ``lam_adj .. lam2``, where the band is.
 
     Returns
     -------
@@ -76,13 +121,7 @@ def plot_sweep(result, ax=None, *, axis: str = "lam", bands: bool = True,
     n_real = int(s["realisation"].nunique()) if len(s) else 0
     alpha = 1.0 if n_real <= 1 else 0.25
     if n_real <= 1 or realisations:
-        for k, (_, g) in enumerate(s.groupby("realisation")):
-            g = g.sort_values("lam")
-            lab = k == 0 and n_real <= 1
-            ax.plot(g[col], g["W_star_max"], "-o", mfc="none", ms=7, color="C0", alpha=alpha,
-                    lw=1, label="max over initial states" if lab else None)
-            ax.plot(g[col], g["W_star_min"], "--^", color="C3", alpha=alpha, ms=4, lw=1,
-                    label="min over initial states" if lab else None)
+        _draw_realisations(ax, s, col, alpha, n_real <= 1)
     if n_real > 1:
         b = result.bands
         b = b[b["point"].astype(str).str.startswith("g")]
@@ -103,6 +142,8 @@ def plot_sweep(result, ax=None, *, axis: str = "lam", bands: bool = True,
                      f"f = {spec.friction}, {spec.n_realisations} realisation(s) x "
                      f"{spec.n_states} initial states", fontsize=9)
     ax.legend(fontsize=7, loc="upper left")
+    if zoom:
+        _inset(ax, result, col, alpha if n_real > 1 else 1.0)
     return ax
 
 
@@ -135,5 +176,5 @@ def plot_fractions(result, ax=None, *, axis: str = "lam"):
     ax.set_ylim(-0.02, 1.02)
     ax.set_title("Cracks that slip / open in the steady cycle"
                  + (f" ({n_real} realisations)" if n_real > 1 else ""), fontsize=9)
-    ax.legend(fontsize=7, loc="center right")
+    ax.legend(fontsize=7, loc="upper left")
     return ax

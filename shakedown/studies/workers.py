@@ -128,9 +128,9 @@ class Workers:
         if scheduler is not None:
             try:
                 import distributed
-            except ImportError:
-                raise InputError('scheduler needs Dask: pip install "shakedown[parallel]"'
-                                 ) from None
+            except ImportError as exc:
+                raise InputError(f'scheduler needs Dask ({exc}): pip install '
+                                 '"shakedown[parallel]"') from None
             self._distributed = distributed
             if isinstance(scheduler, distributed.Client):
                 self._client = scheduler
