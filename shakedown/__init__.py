@@ -45,6 +45,7 @@ _LAZY = {
     "scenes": None,
     "gallery": None,
     "sweep": None,
+    "half_plane_model": "models.half_plane",
 }
 
 

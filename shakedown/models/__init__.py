@@ -1,0 +1,1 @@
+"""Builders of discrete frictional systems from continuum models (half-plane contact, ...)."""
