@@ -58,17 +58,42 @@ def _positive(name, value):
     return v
 
 
+def _modulus(name, value):
+    """A Young's modulus ``> 0``; ``inf`` marks a rigid body."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise sd.InputError(f"{name} must be a number > 0 (inf: rigid), got {value!r}") from None
+    if np.isnan(v) or v <= 0:
+        raise sd.InputError(f"{name} must be > 0 (inf: rigid), got {value!r}")
+    return v
+
+
+def rigid_indenter_materials(beta: float, youngs_modulus: float = 1.0):
+    """``((E, nu), (inf, 0))``: an elastic body 1 on a rigid body 2 with Dundurs' ``beta``.
+
+    ``beta = (1 - 2 nu) / (2 (1 - nu))`` for a rigid body 2, so ``nu = (1 - 2 beta)/(2 (1 - beta))``;
+    ``0 <= beta < 0.5`` (``beta = 0``: incompressible body 1).
+    """
+    b = float(beta)
+    if not 0.0 <= b < 0.5:
+        raise sd.InputError(f"beta must be in [0, 0.5) for a rigid body 2, got {beta!r}")
+    return ((float(youngs_modulus), (1 - 2 * b) / (2 * (1 - b))), (np.inf, 0.0))
+
+
 def _materials(materials):
     try:
         (E1, nu1), (E2, nu2) = materials
     except (TypeError, ValueError):
         raise sd.InputError(
             f"materials must be ((E1, nu1), (E2, nu2)), got {materials!r}") from None
-    E1 = _positive("materials[0] Young's modulus E1", E1)
-    E2 = _positive("materials[1] Young's modulus E2", E2)
+    E1 = _modulus("materials[0] Young's modulus E1", E1)
+    E2 = _modulus("materials[1] Young's modulus E2", E2)
+    if np.isinf(E1) and np.isinf(E2):
+        raise sd.InputError("materials: at most one body may be rigid (E = inf)")
     for name, nu in (("materials[0] Poisson ratio nu1", nu1), ("materials[1] Poisson ratio nu2", nu2)):
-        if not (isinstance(nu, (int, float)) and -1.0 < nu < 0.5):
-            raise sd.InputError(f"{name} must be in (-1, 0.5), got {nu!r}")
+        if not (isinstance(nu, (int, float, np.floating)) and -1.0 < nu <= 0.5):
+            raise sd.InputError(f"{name} must be in (-1, 0.5], got {nu!r}")
     inv = (1 - nu1**2) / E1 + (1 - nu2**2) / E2
     k1 = (1 - 2 * nu1) * (1 + nu1) / (2 * E1)
     k2 = (1 - 2 * nu2) * (1 + nu2) / (2 * E2)
