@@ -1,0 +1,143 @@
+"""Experiments on the half-plane model: loading paths ``OA``, bounds, the ``beta`` study.
+
+* :func:`oa_state` follows an initial loading path ``OA`` in ``(P, Q)`` space (seed ``002``
+  Fig. 13) with implicit steps and returns the slips and gaps at ``A``: initial states for
+  :func:`shakedown.solve_cycles` that a real loading history can produce.
+* :func:`random_oa_paths` draws such paths inside the friction cone, reproducibly.
+* :func:`contact_subsystem` condenses out the nodes that are open under a static load (exact
+  while they stay open: their reactions vanish), so that the no-separation theory of the
+  bounds (MODEL.md s.3) applies to the remaining nodes.
+* :func:`beta_study` runs, for each Dundurs ``beta``, cycles from many ``OA`` paths and the
+  bounds ``lam1``, ``lam2``, ``lam_adj``, and tabulates how the steady state depends on ``OA``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+import shakedown as sd
+
+from .model import half_plane_model, rigid_indenter_materials
+
+
+def oa_state(model, P_path, Q_path, substeps: int = 10):
+    """Slips and gaps after the loading path ``(P_path[k], Q_path[k])`` from the virgin state.
+
+    The path starts at ``P = Q = 0`` (not included) and is refined into ``substeps`` implicit
+    steps per segment.  Returns ``(slip, gap)``, shape (N-1,) each.
+    """
+    P = np.concatenate([[0.0], np.asarray(P_path, float)])
+    Q = np.concatenate([[0.0], np.asarray(Q_path, float)])
+    s = model.system
+    v = np.zeros(s.n_nodes)
+    res = None
+    for k in range(1, P.size):
+        for a in np.arange(1, substeps + 1) / substeps:
+            qw, pw = model.welded(Q[k - 1] + a * (Q[k] - Q[k - 1]), P[k - 1] + a * (P[k] - P[k - 1]))
+            res = sd.solve_step(s, v, qw, pw, guess=None if res is None else res.active_set)
+            if not res.success:
+                raise sd.SolverError(f"OA path: step failed ({res.message})", partial=res)
+            v = res.slip
+    return v, res.gap
+
+
+def random_oa_paths(n_paths: int, end, friction: float, P_scale: float, rng=None,
+                    n_points: int = 3):
+    """``n_paths`` random paths ``OA`` ending at ``end = (P_A, Q_A)``; path 0 is the straight line.
+
+    Intermediate points have ``P`` uniform in ``[0.3, 1.6] P_scale`` and ``Q`` uniform in
+    ``(-0.9, 0.9) f P`` (inside the friction cone).  Returns a list of ``(P, Q)`` arrays.
+    """
+    gen = np.random.default_rng(rng)
+    PA, QA = float(end[0]), float(end[1])
+    paths = [(np.array([PA]), np.array([QA]))]
+    for _ in range(int(n_paths) - 1):
+        P = gen.uniform(0.3, 1.6, n_points) * P_scale
+        Q = gen.uniform(-0.9, 0.9, n_points) * friction * P
+        paths.append((np.append(P, PA), np.append(Q, QA)))
+    return paths
+
+
+def contact_subsystem(model, load, P_static: float, Q_static: float = 0.0):
+    """Condense out the nodes open under the static load ``(Q_static, P_static)``.
+
+    Returns ``(system, load, nodes)``: the stiffness ``K_cc - K_co K_oo^-1 K_oc`` and welded
+    reactions ``r_c - K_co K_oo^-1 r_o`` of the closed nodes ``nodes`` (indices into
+    ``model.x``), exact as long as the other nodes stay open (zero reactions).
+    """
+    s = model.system
+    qw, pw = model.welded(Q_static, P_static)
+    res = sd.solve_step(s, np.zeros(s.n_nodes), qw, pw)
+    closed = np.flatnonzero(res.p > 1e-9 * np.max(np.abs(res.p)))  # round-off: open nodes ~1e-20
+    n = s.n_nodes
+    c = np.concatenate([closed, n + closed])
+    o = np.setdiff1d(np.arange(2 * n), c)
+    K = s.K
+    X = np.linalg.solve(K[np.ix_(o, o)], K[np.ix_(o, c)])  # K_oo^-1 K_oc
+    Kc = K[np.ix_(c, c)] - K[np.ix_(c, o)] @ X
+    Kc = 0.5 * (Kc + Kc.T)
+    m = closed.size
+    sub = sd.DiscreteSystem(Kc[:m, :m], Kc[:m, m:], Kc[m:, m:], s.friction[closed])
+
+    def cond(q, p):
+        r = np.concatenate([q, p], axis=-1)
+        rc = r[..., c] - r[..., o] @ X
+        return rc[..., :m], rc[..., m:]
+
+    q0, p0 = cond(load.q0, load.p0)
+    parts = {k: cond(getattr(load, f"q_{k}"), getattr(load, f"p_{k}")) for k in ("cos", "sin")}
+    sub_load = sd.LoadCycle.from_harmonics(q0, p0, q_cos=parts["cos"][0], p_cos=parts["cos"][1],
+                                           q_sin=parts["sin"][0], p_sin=parts["sin"][1])
+    return sub, sub_load, closed
+
+
+def beta_study(betas, *, n_nodes=31, friction=0.5, P0=1e-3, P1=0.3e-3, Q1=0.3e-3, phase=0.6,
+               n_paths=6, rng=0, steps_per_cycle=100, max_cycles=150, bounds_Q1=None):
+    """Steady cycles from ``n_paths`` loading paths ``OA`` for each ``beta``; bounds at constant ``P0``.
+
+    Body 1 elastic (``E = 1``), body 2 rigid (:func:`rigid_indenter_materials`), Hertz profile
+    ``R = 1``, window ``2.4 a(P0 + P1)``.  Returns a ``pandas.DataFrame``, one row per ``beta``:
+    ``W_min``, ``W_max``, ``W_spread`` (relative), ``n_stuck_min``, ``n_stuck_max``,
+    ``stuck_sets`` (distinct permanently stuck sets), ``cycles_max``, ``period_max``,
+    ``reference_ok`` (eq. (5) exact on every run), ``reference_excess`` (largest
+    ``(|q_m| - f p_m) / P`` of the reference cell, > 0: eq. (5) is not exact), ``lam1``, ``lam2``, ``lam_adj`` of the closed
+    nodes at constant ``P0`` with ``Q = lam bounds_Q1 cos(2 pi t)`` (default ``Q1``).
+    """
+    import pandas as pd
+
+    from .continuum import hertz_half_width
+
+    rows = []
+    for beta in betas:
+        mats = rigid_indenter_materials(beta)
+        e_star = mats[0][0] / (1 - mats[0][1] ** 2)
+        a_max = float(hertz_half_width(P0 + P1, 1.0, e_star))
+        m = half_plane_model(radius=1.0, n_nodes=n_nodes, width=2.4 * a_max, friction=friction,
+                             materials=mats)
+        load = m.load_cycle(P0=P0, P1=P1, Q1=Q1, phase=phase)
+        end = (P0 + P1 * np.cos(phase), Q1)
+        Ws, stuck, cyc, per, ok, worst = [], [], [], [], [], []
+        for Pp, Qp in random_oa_paths(n_paths, end, friction, P0, rng=rng):
+            v, w = oa_state(m, Pp, Qp)
+            run = sd.solve_cycles(m.system, load, 1.0, initial_slip=v, initial_gap=w,
+                                  steps_per_cycle=steps_per_cycle, max_cycles=max_cycles)
+            Ws.append(run.steady_dissipation)
+            stuck.append(tuple(run.stuck_nodes))
+            cyc.append(run.cycles_to_steady)
+            per.append(run.period)
+            chk = m.check_reference(
+                run.steady_table, lambda t: P0 + P1 * np.cos(2 * np.pi * t + phase),
+                lambda t: Q1 * np.cos(2 * np.pi * t))
+            ok.append(run.success and chk[0])
+            worst.append(chk[1])
+        sub, sub_load, _ = contact_subsystem(m, m.load_cycle(P0=P0, Q1=bounds_Q1 or Q1), P0)
+        b = sd.shakedown_bounds(sub, sub_load)
+        Ws = np.array(Ws)
+        rows.append({
+            "beta": float(beta), "W_min": Ws.min(), "W_max": Ws.max(),
+            "W_spread": (Ws.max() - Ws.min()) / Ws.max(),
+            "n_stuck_min": min(map(len, stuck)), "n_stuck_max": max(map(len, stuck)),
+            "stuck_sets": len(set(stuck)), "cycles_max": max(cyc), "period_max": max(per),
+            "reference_ok": all(ok), "reference_excess": max(worst), "lam1": b.lam1, "lam2": b.lam2, "lam_adj": b.lam_adj,
+        })
+    return pd.DataFrame(rows)
