@@ -58,6 +58,48 @@ def random_oa_paths(n_paths: int, end, friction: float, P_scale: float, rng=None
     return paths
 
 
+def oa_runs(model, load, paths, *, lam=1.0, steps_per_cycle=100, max_cycles=150):
+    """:func:`shakedown.solve_cycles` from the end state of each loading path ``OA``."""
+    runs = []
+    for Pp, Qp in paths:
+        v, w = oa_state(model, Pp, Qp)
+        runs.append(sd.solve_cycles(model.system, load, lam, initial_slip=v, initial_gap=w,
+                                    steps_per_cycle=steps_per_cycle, max_cycles=max_cycles))
+    return runs
+
+
+def compare_runs(runs):
+    """How much the steady cycles of ``runs`` (same model and load) differ.
+
+    Returns a dict: ``W`` (array), ``W_spread`` (``(max - min)/max``), ``stuck_sets`` (number of
+    distinct permanently stuck sets), ``time_varying_spread`` (largest spread across runs of
+    ``q``, ``p`` minus their cycle means, over nodes and times, relative to ``max |p|``),
+    ``slip_tv_spread`` (the same for the slips, relative to the largest slip range),
+    ``locked_spread`` (spread of the cycle-mean slip of the stuck nodes, relative to the largest
+    slip range), ``cycles_to_steady`` (array).
+    """
+    tabs = [r.steady_table.sort_values(["t", "node"]) for r in runs]
+    n = min(len(t) for t in tabs)
+
+    def tv(t, col):
+        x = t[col].to_numpy()[:n]
+        return x - t.groupby("node")[col].transform("mean").to_numpy()[:n]
+
+    pmax = max(np.abs(t["p"]).max() for t in tabs)
+    srange = max(t.groupby("node")["slip"].agg(np.ptp).max() for t in tabs)
+    qp = np.array([np.concatenate([tv(t, "q"), tv(t, "p")]) for t in tabs])
+    sl = np.array([tv(t, "slip") for t in tabs])
+    stuck = [tuple(r.stuck_nodes) for r in runs]
+    common = sorted(set.intersection(*map(set, stuck))) if stuck else []
+    locked = np.array([t.groupby("node")["slip"].mean().to_numpy()[common] for t in tabs])
+    W = np.array([r.steady_dissipation for r in runs])
+    return {"W": W, "W_spread": float(np.ptp(W) / W.max()), "stuck_sets": len(set(stuck)),
+            "time_varying_spread": float(np.ptp(qp, axis=0).max() / pmax),
+            "slip_tv_spread": float(np.ptp(sl, axis=0).max() / srange),
+            "locked_spread": float(np.ptp(locked, axis=0).max() / srange) if common else 0.0,
+            "cycles_to_steady": np.array([r.cycles_to_steady for r in runs])}
+
+
 def contact_subsystem(model, load, P_static: float, Q_static: float = 0.0):
     """Condense out the nodes open under the static load ``(Q_static, P_static)``.
 
@@ -97,7 +139,8 @@ def beta_study(betas, *, n_nodes=31, friction=0.5, P0=1e-3, P1=0.3e-3, Q1=0.3e-3
 
     Body 1 elastic (``E = 1``), body 2 rigid (:func:`rigid_indenter_materials`), Hertz profile
     ``R = 1``, window ``2.4 a(P0 + P1)``.  Returns a ``pandas.DataFrame``, one row per ``beta``:
-    ``W_min``, ``W_max``, ``W_spread`` (relative), ``n_stuck_min``, ``n_stuck_max``,
+    ``W_min``, ``W_max``, ``W_spread`` (relative), ``tv_spread`` (time-varying reactions, see
+    :func:`compare_runs`), ``n_stuck_min``, ``n_stuck_max``,
     ``stuck_sets`` (distinct permanently stuck sets), ``cycles_max``, ``period_max``,
     ``reference_ok`` (eq. (5) exact on every run), ``reference_excess`` (largest
     ``(|q_m| - f p_m) / P`` of the reference cell, > 0: eq. (5) is not exact), ``lam1``, ``lam2``, ``lam_adj`` of the closed
@@ -116,28 +159,26 @@ def beta_study(betas, *, n_nodes=31, friction=0.5, P0=1e-3, P1=0.3e-3, Q1=0.3e-3
                              materials=mats)
         load = m.load_cycle(P0=P0, P1=P1, Q1=Q1, phase=phase)
         end = (P0 + P1 * np.cos(phase), Q1)
-        Ws, stuck, cyc, per, ok, worst = [], [], [], [], [], []
-        for Pp, Qp in random_oa_paths(n_paths, end, friction, P0, rng=rng):
-            v, w = oa_state(m, Pp, Qp)
-            run = sd.solve_cycles(m.system, load, 1.0, initial_slip=v, initial_gap=w,
-                                  steps_per_cycle=steps_per_cycle, max_cycles=max_cycles)
-            Ws.append(run.steady_dissipation)
-            stuck.append(tuple(run.stuck_nodes))
-            cyc.append(run.cycles_to_steady)
-            per.append(run.period)
+        paths = random_oa_paths(n_paths, end, friction, P0, rng=rng)
+        runs = oa_runs(m, load, paths, steps_per_cycle=steps_per_cycle, max_cycles=max_cycles)
+        ok, worst = [], []
+        for run in runs:
             chk = m.check_reference(
                 run.steady_table, lambda t: P0 + P1 * np.cos(2 * np.pi * t + phase),
                 lambda t: Q1 * np.cos(2 * np.pi * t))
             ok.append(run.success and chk[0])
             worst.append(chk[1])
+        cmp = compare_runs(runs)
         sub, sub_load, _ = contact_subsystem(m, m.load_cycle(P0=P0, Q1=bounds_Q1 or Q1), P0)
         b = sd.shakedown_bounds(sub, sub_load)
-        Ws = np.array(Ws)
+        Ws = cmp["W"]
         rows.append({
             "beta": float(beta), "W_min": Ws.min(), "W_max": Ws.max(),
-            "W_spread": (Ws.max() - Ws.min()) / Ws.max(),
-            "n_stuck_min": min(map(len, stuck)), "n_stuck_max": max(map(len, stuck)),
-            "stuck_sets": len(set(stuck)), "cycles_max": max(cyc), "period_max": max(per),
-            "reference_ok": all(ok), "reference_excess": max(worst), "lam1": b.lam1, "lam2": b.lam2, "lam_adj": b.lam_adj,
+            "W_spread": cmp["W_spread"], "tv_spread": cmp["time_varying_spread"],
+            "n_stuck_min": min(len(r.stuck_nodes) for r in runs),
+            "n_stuck_max": max(len(r.stuck_nodes) for r in runs),
+            "stuck_sets": cmp["stuck_sets"], "cycles_max": int(cmp["cycles_to_steady"].max()),
+            "period_max": max(r.period for r in runs), "reference_ok": all(ok),
+            "reference_excess": max(worst), "lam1": b.lam1, "lam2": b.lam2, "lam_adj": b.lam_adj,
         })
     return pd.DataFrame(rows)
