@@ -44,9 +44,9 @@ def test_cell_kernels_match_quadrature():
     for i, j in [(0, 0), (0, 1), (0, 3), (5, 2)]:
         d = i - j
         g = integrate.dblquad(lambda s, x: np.log(abs(x - s) + 1e-300), -0.5, 0.5,
-                              lambda x: d - 0.5, lambda x: d + 0.5)[0]
+                              lambda x, d=d: d - 0.5, lambda x, d=d: d + 0.5)[0]
         sg = integrate.dblquad(lambda s, x: np.sign(x - s), -0.5, 0.5,
-                               lambda x: d - 0.5, lambda x: d + 0.5)[0]
+                               lambda x, d=d: d - 0.5, lambda x, d=d: d + 0.5)[0]
         # dblquad is accurate to ~1e-8 on the log singularity (i == j)
         assert G[j, i] == pytest.approx(g, abs=1e-7)
         assert S[j, i] == pytest.approx(sg, abs=1e-7)
