@@ -144,7 +144,8 @@ def beta_study(betas, *, n_nodes=31, friction=0.5, P0=1e-3, P1=0.3e-3, Q1=0.3e-3
     ``stuck_sets`` (distinct permanently stuck sets), ``cycles_max``, ``period_max``,
     ``reference_ok`` (eq. (5) exact on every run), ``reference_excess`` (largest
     ``(|q_m| - f p_m) / P`` of the reference cell, > 0: eq. (5) is not exact), ``lam1``,
-    ``lam2``, ``lam_adj`` of the closed nodes at constant ``P0`` with ``Q = lam bounds_Q1 cos(2 pi t)`` (default ``Q1``).
+    ``lam2``, ``lam_adj`` of the closed nodes at constant ``P0`` with
+    ``Q = lam bounds_Q1 cos(2 pi t)`` (default ``Q1``).
     """
     import pandas as pd
 
