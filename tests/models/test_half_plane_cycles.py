@@ -130,3 +130,18 @@ def test_reference_check_objects_to_a_wrong_answer(run41):
     ok, worst = m.check_reference(bad, lambda t: P0 + P1 * np.cos(2 * np.pi * t + PHASE),
                                   lambda t: Q1 * np.cos(2 * np.pi * t))
     assert not ok and worst > 0
+
+
+def test_beta_study_path_dependence_appears_with_coupling():
+    from shakedown.models.half_plane.studies import beta_study
+
+    tab = beta_study([0.0, 0.1], n_nodes=21, n_paths=3, steps_per_cycle=100)
+    b0, b1 = tab.iloc[0], tab.iloc[1]
+    # beta = 0: unique W and time-varying response to round-off, finite-cycle steady state,
+    # Melan lam1 = lam2
+    assert b0.W_spread < 1e-9 and b0.tv_spread < 1e-9 and b0.cycles_max <= 2
+    assert b0.lam1 == pytest.approx(b0.lam2, rel=1e-9)
+    # beta = 0.1 (reference cell verified inside the cone): W depends on the path (measured
+    # spread 5e-3), the approach is asymptotic, lam1 < lam2
+    assert b1.reference_ok
+    assert b1.W_spread > 1e-3 and b1.cycles_max > 2 and b1.lam1 < b1.lam2

@@ -257,7 +257,7 @@ class HalfPlaneModel:
 
 def half_plane_model(profile: str = "hertz", *, radius=None, n_nodes: int = 101, width=None,
                      friction=0.5, materials=((1.0, 0.3), (1.0, 0.3)), flat_half_width=None,
-                     exponent=None, gap_samples=None) -> HalfPlaneModel:
+                     exponent=None, gap_samples=None, reference_x=None) -> HalfPlaneModel:
     """Discretise a 2-D half-plane contact into a :class:`shakedown.DiscreteSystem`.
 
     Parameters
@@ -276,6 +276,9 @@ def half_plane_model(profile: str = "hertz", *, radius=None, n_nodes: int = 101,
         Young's moduli [force/length^2] and Poisson ratios; body 1 (``y > 0``) carries ``q``.
     flat_half_width, exponent, gap_samples
         Profile parameters (see :func:`profile_function`).
+    reference_x : float, optional
+        Put the reference cell (stuck and closed by construction) at the cell nearest this
+        position [length]; default: the minimum of ``g`` nearest ``x = 0``.
 
     Examples
     --------
@@ -305,6 +308,11 @@ def half_plane_model(profile: str = "hertz", *, radius=None, n_nodes: int = 101,
         raise sd.InputError("the gap profile must be finite on the window")
     best = np.flatnonzero(gap <= gap.min() + 1e-12 * max(abs(gap).max(), 1e-300))
     m = int(best[np.argmin(np.abs(xc[best]))])
+    if reference_x is not None:
+        try:
+            m = int(np.argmin(np.abs(xc - float(reference_x))))
+        except (TypeError, ValueError):
+            raise sd.InputError(f"reference_x must be a number, got {reference_x!r}") from None
     F = compliance(N, h, e_star, beta)
     keep = np.delete(np.arange(N), m)
     T1 = np.zeros((N, N - 1))
