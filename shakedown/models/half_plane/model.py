@@ -31,7 +31,12 @@ resultants, ``q_m = Q - sum q'_j``, ``p_m = P - sum p'_j`` (:meth:`HalfPlaneMode
 and :meth:`HalfPlaneModel.check_reference` verifies ``p_m > 0`` and ``|q_m| <= f p_m`` along a run.
 For ``beta = 0``, ``|Q| < f P`` and a symmetric convex profile the Cattaneo-Mindlin /
 Ciavarella-Jager stick zone is always a central interval, so the centre cell never slips;
-for ``beta != 0`` the check is what guarantees exactness.
+for ``beta != 0`` the check is what guarantees exactness, and ``reference_x`` (or
+:func:`.studies.choose_reference`, which moves the reference to the cell with the largest stick
+margin) keeps it satisfied up to ``beta ~ 0.2`` at ``f = 0.5`` in our runs.  Why not a soft
+spring: under force control the only stiffness against a rigid tangential shift is friction
+itself, so any spring changes the resultant ``sum q = Q`` by ``k s``; the reference cell changes
+nothing while it sticks.
 """
 
 from __future__ import annotations
