@@ -145,3 +145,16 @@ def test_beta_study_path_dependence_appears_with_coupling():
     # spread 5e-3), the approach is asymptotic, lam1 < lam2
     assert b1.reference_ok
     assert b1.W_spread > 1e-3 and b1.cycles_max > 2 and b1.lam1 < b1.lam2
+
+
+def test_bounds_do_not_depend_on_units():
+    from shakedown.models.half_plane.studies import contact_subsystem
+
+    lams = []
+    for e, force, length in ((1.0, 1.0, 1.0), (1e9, 1e6, 1e-3)):
+        m, _ = build(21, e=E * e, force=force, length=length)
+        sub, sl, _ = contact_subsystem(m, m.load_cycle(P0=P0 * force, Q1=Q1 * force), P0 * force)
+        b = sd.shakedown_bounds(sub, sl)
+        lams.append((b.lam1, b.lam2))
+    # LP tolerances are relative to the force scale: agreement to LP round-off
+    assert np.allclose(lams[0], lams[1], rtol=1e-7)
