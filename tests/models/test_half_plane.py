@@ -170,3 +170,13 @@ def test_bad_load_names_the_field():
         m.load_cycle(P0=-1.0)
     with pytest.raises(sd.InputError, match="phase"):
         m.load_cycle(P0=1.0, phase=float("nan"))
+
+
+def test_sampled_load_matches_harmonic_load_at_the_samples():
+    m = model(21)
+    t = np.arange(16) / 16
+    h = m.load_cycle(P0=P, P1=0.3 * P, Q1=0.2 * P, phase=0.7)
+    s = m.load_from_samples(P, 0.3 * P * np.cos(2 * np.pi * t + 0.7), 0.2 * P * np.cos(2 * np.pi * t))
+    for lam in (0.0, 1.0, 2.5):
+        assert np.allclose(h.q_w(t, lam), s.q_w(t, lam), rtol=0, atol=1e-12 * P)
+        assert np.allclose(h.p_w(t, lam), s.p_w(t, lam), rtol=0, atol=1e-12 * P)
