@@ -158,3 +158,25 @@ def test_bounds_do_not_depend_on_units():
         lams.append((b.lam1, b.lam2))
     # LP tolerances are relative to the force scale: agreement to LP round-off
     assert np.allclose(lams[0], lams[1], rtol=1e-7)
+
+
+def test_general_profile_continuum_and_discrete_agree():
+    from shakedown.models.half_plane import profile_function
+
+    g_h = profile_function("hertz", radius=R)
+    W_h = cont.hertz_cycle(P0, P1, Q1, PHASE, F, E_STAR, steps=1000)["dissipation"]
+    W_t = cont.profile_cycle(P0, P1, Q1, PHASE, F, E_STAR, g_h, 1.5 * A_MAX, steps=1000)["dissipation"]
+    # tabulated ln a(P') (3000 points) vs closed form: measured 7e-8
+    assert W_t == pytest.approx(W_h, rel=1e-5)
+    kw = {"flat_half_width": 0.02}
+    g = profile_function("flat_rounded", radius=R, **kw)
+    a = cont.contact_half_width(P0 + P1, g, E_STAR, 1.0)
+    ref = cont.profile_cycle(P0, P1, Q1, PHASE, F, E_STAR, g, 1.3 * a, steps=1000)
+    a_T = cont.contact_half_width(cont.ellipse_construction(P0, P1, Q1, PHASE, F)["P_T"], g, E_STAR, 1.0)
+    m = sd.half_plane_model("flat_rounded", radius=R, n_nodes=81, width=2.4 * a, friction=F, **kw)
+    run = sd.solve_cycles(m.system, m.load_cycle(P0=P0, P1=P1, Q1=Q1, phase=PHASE), 1.0,
+                          steps_per_cycle=200, max_cycles=20)
+    assert run.cycles_to_steady <= 2
+    # measured |W_h/W - 1| = 1.2e-2 (N=41), 7.6e-4 (N=81), 2.7e-4 (N=161)
+    assert run.steady_dissipation == pytest.approx(ref["dissipation"], rel=5e-3)
+    assert abs(np.abs(m.x[run.stuck_nodes]).max() - a_T) <= m.h

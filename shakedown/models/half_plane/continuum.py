@@ -29,9 +29,12 @@ tangent construction: the shells that never change in the steady cycle are
 where the tangents of slope ``-f`` and ``+f`` to the loading curve meet; ``A_T = a(P_T)``.
 
 Dissipation: the tangential rigid shift of body 1 (measured at a stuck centre) is
-``s = (2/(pi E*)) int ln|x| q dx = (2/(pi E*)) int rho(P') ln(a(P')/2) dP'`` (Hertz, from
-``int ln|x| dp/dP' dx = ln(a'/2)``), and ``W = closed integral of s dQ`` (the normal work is an
-exact differential when ``beta = 0``).
+``s = (2/(pi E*)) int ln|x| q dx = (2/(pi E*)) int rho(P') ln(a(P')/2) dP'``, because at fixed
+contact width the pressure increment of *any* symmetric profile is the flat-punch distribution
+``dp/dP' = 1/(pi sqrt(a'^2 - x^2))`` and ``int ln|x| dp/dP' dx = ln(a'/2)``; and
+``W = closed integral of s dQ`` (the normal work is an exact differential when ``beta = 0``).
+:func:`hertz_cycle` uses ``a ~ sqrt(P')`` in closed form, :func:`profile_cycle` a table of
+``a(P')`` for any symmetric convex profile.
 """
 
 from __future__ import annotations
@@ -205,8 +208,40 @@ def hertz_shift(states, e_star):
     return out
 
 
+def profile_shift_table(gap_function, e_star, a_max, n: int = 3000):
+    """``(P, Lambda)`` with ``Lambda(P) = int_0^P ln a(P') dP'`` for a symmetric convex profile.
+
+    The shift of body 1 is ``s = (2/(pi E*)) sum_k rho_k [Lambda(e_{k+1}) - Lambda(e_k)]`` up to
+    ``c Q``: at fixed contact width the pressure increment is the flat-punch distribution
+    ``dp/dP = 1/(pi sqrt(a^2 - x^2))`` for *any* profile, and ``int ln|x| dp/dP dx = ln(a/2)``.
+    """
+    a = a_max * np.linspace(1e-4, 1.0, n) ** 2
+    P = np.array([contact_load(ai, gap_function, e_star) for ai in a])
+    P = np.maximum.accumulate(P)
+    lam = np.concatenate([[0.0], np.cumsum(0.5 * (np.log(a[1:]) + np.log(a[:-1])) * np.diff(P))])
+    return P, lam
+
+
+def _shift(states, e_star, table):
+    P, lam = table
+    out = np.empty(len(states))
+    for i, (e, r) in enumerate(states):
+        out[i] = 2.0 / (np.pi * e_star) * np.sum(r * np.diff(np.interp(e, P, lam)))
+    return out
+
+
+def profile_cycle(P0, P1, Q1, phase, friction, e_star, gap_function, a_max, *, lam: float = 1.0,
+                  steps: int = 2000, cycles: int = 3):
+    """:func:`hertz_cycle` for any symmetric convex gap ``g(x)`` (contacts up to ``a_max``)."""
+    table = profile_shift_table(gap_function, e_star, a_max)
+    if table[0][-1] < P0 + abs(lam * P1):
+        raise sd.InputError(f"a_max = {a_max:g} is too small for P = {P0 + abs(lam * P1):g}")
+    return hertz_cycle(P0, P1, Q1, phase, friction, e_star, lam=lam, steps=steps, cycles=cycles,
+                       _table=table)
+
+
 def hertz_cycle(P0, P1, Q1, phase, friction, e_star, *, lam: float = 1.0, steps: int = 2000,
-                cycles: int = 3):
+                cycles: int = 3, _table=None):
     """Continuum steady cycle of the Hertz contact under the elliptic load (``beta = 0``).
 
     Starts from ``P = P0 + lam P1 cos(phase)`` applied with ``Q = 0`` and ``Q`` raised to its
@@ -223,7 +258,7 @@ def hertz_cycle(P0, P1, Q1, phase, friction, e_star, *, lam: float = 1.0, steps:
     Qp = np.concatenate([pre * Q[0], Q])
     stick, states = shell_history(Pp, Qp, friction)
     stick, states = stick[50:], states[50:]
-    s = hertz_shift(states, e_star)
+    s = hertz_shift(states, e_star) if _table is None else _shift(states, e_star, _table)
     dW = 0.5 * (s[1:] + s[:-1]) * np.diff(Q)
     per = np.add.reduceat(dW, np.arange(0, cycles * steps, steps))
     last = slice((cycles - 1) * steps, cycles * steps + 1)
