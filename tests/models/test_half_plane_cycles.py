@@ -180,3 +180,19 @@ def test_general_profile_continuum_and_discrete_agree():
     # measured |W_h/W - 1| = 1.2e-2 (N=41), 7.6e-4 (N=81), 2.7e-4 (N=161)
     assert run.steady_dissipation == pytest.approx(ref["dissipation"], rel=5e-3)
     assert abs(np.abs(m.x[run.stuck_nodes]).max() - a_T) <= m.h
+
+
+def test_no_slip_in_the_discrete_cycle_where_seed_condition_6_holds(run41):
+    """Seed eq. (6): no node slips during a step with dP > 0 and |dQ| < f dP."""
+    m, load, run = run41
+    tab = run.steady_table
+    ts = np.array(sorted(tab["t"].unique()))
+    dt = 1.0 / run.steps_per_cycle
+    P = lambda t: P0 + P1 * np.cos(2 * np.pi * t + PHASE)  # noqa: E731
+    Q = lambda t: Q1 * np.cos(2 * np.pi * t)  # noqa: E731
+    held = [t for t in ts[1:] if P(t) > P(t - dt) and abs(Q(t) - Q(t - dt)) < F * (P(t) - P(t - dt))]
+    assert len(held) >= 10
+    states = tab[tab["t"].isin(held)]["state"]
+    assert not states.isin(["forward", "backward"]).any()
+    # and outside those steps the edges do slip
+    assert tab["state"].isin(["forward", "backward"]).any()
