@@ -36,8 +36,8 @@ from pathlib import Path
 import numpy as np
 
 import shakedown as sd
-from shakedown.complementarity import StepSolver
-from shakedown.lemke import lemke
+from shakedown.evolution.complementarity import StepSolver
+from shakedown.evolution.lemke import lemke
 
 
 def coupled_system(n, seed=0, samples=None, friction_fraction=0.5):

@@ -44,7 +44,7 @@ def model(n: int):
 def one(method: str, n: int, repeat: int) -> dict:
     import numpy as np
 
-    from shakedown.fe.condense import Assembled
+    from shakedown.models.fe.assembled import Assembled
 
     m = model(n)
     times = []

@@ -24,7 +24,7 @@ import numpy as np
 
 import shakedown as sd
 from shakedown import gallery
-from shakedown.steady import steady_cycle
+from shakedown.evolution.steady import steady_cycle
 
 
 def variant(a01: float):

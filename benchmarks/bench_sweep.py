@@ -40,8 +40,8 @@ SCENE = ROOT / "data" / "scenes" / "cracks_default.toml"
 def default_spec(**changes):
     from dataclasses import replace
 
-    from shakedown.scenes import tomllib
-    from shakedown.sweep import SweepSpec
+    from shakedown.scenes.files import tomllib
+    from shakedown.studies.sweep import SweepSpec
 
     raw = tomllib.loads(SCENE.read_text())
     model = {k: v for k, v in raw["model"].items() if k != "kind"}
@@ -55,7 +55,7 @@ def machine() -> str:
 
 
 def bench_study(repeat: int) -> list[str]:
-    from shakedown.sweep import run_sweep
+    from shakedown.studies.sweep import run_sweep
 
     spec = default_spec()
     out = [f"### Default study ({spec.n_cracks} cracks, {spec.n_realisations} realisation, "
@@ -118,7 +118,7 @@ def bench_study(repeat: int) -> list[str]:
 def bench_steps(lams_rel=(1.25, 2.0), states=(0, 1)) -> list[str]:
     """W* against the time discretisation, on realisation 0 of the default study."""
     from shakedown.evolution import solve_cycles
-    from shakedown.sweep import _realisation_task, initial_slip, realisation_model
+    from shakedown.studies.sweep import _realisation_task, initial_slip, realisation_model
 
     spec = default_spec()
     row = _realisation_task(spec, 0)
@@ -162,7 +162,7 @@ def _trivial(i):
 
 
 def bench_engine(n_tasks: int = 400) -> list[str]:
-    from shakedown.store import Task, open_store, run_tasks
+    from shakedown.studies.store import Task, open_store, run_tasks
 
     tasks = [Task(f"k{i}", _trivial, (i,)) for i in range(n_tasks)]
     out = ["### Engine overhead (trivial tasks, in process, one append per task)", "",

@@ -42,11 +42,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.special import ellipe, ellipk
 
-from shakedown.errors import InputError
+from shakedown.model.errors import InputError
 
 from .cracks import CrackSet
 from .fields import mode_stress_local
-from .kachanov import CrackNetworkModel, _check_cracks, _check_material
+from .model import CrackNetworkModel, _check_cracks, _check_material
 
 __all__ = [
     "BEMModel",

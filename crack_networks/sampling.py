@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from shakedown.errors import InputError
+from shakedown.model.errors import InputError
 
 from .cracks import CrackSet, segment_distance
 

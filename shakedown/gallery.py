@@ -19,9 +19,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import InputError
-from .loading import LoadCycle
-from .system import DiscreteSystem
+from .model.errors import InputError
+from .model.loading import LoadCycle
+from .model.system import DiscreteSystem
 
 __all__ = [
     "ReferenceProblem",

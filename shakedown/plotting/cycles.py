@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import InputError
+from ..model.errors import InputError
 
 __all__ = [
     "plot_dissipation",
@@ -195,7 +195,7 @@ def plot_node_states(run, ax=None):
 
 
 def _lines(system, load, lam, times):
-    from ..bounds import extreme_constraints
+    from ..bounds.engine import extreme_constraints
 
     cs = extreme_constraints(system, load)
     extreme = cs.offsets(lam)
@@ -298,7 +298,7 @@ def plot_trajectory(system, load, lam: float, trajectories=None, ax=None, *, spa
             ax.plot(l_[:, 0], l_[:, 1], color=c, lw=2.2, label=lab if lab_start is None else lab)
             pts.append(l_)
     # view box: trajectories and the safe region / line intersections
-    from ..bounds import _polygon_2d
+    from ..bounds.engine import _polygon_2d
 
     poly = _polygon_2d(G, b_ext) if extremes else np.zeros((0, 2))
     if len(poly):

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError, ShapeError
+from ..model.errors import InputError, ShapeError
 
 FREE, STICK, SLIP, FRICTIONLESS = "free", "stick", "slip", "frictionless"
 STATES = (FREE, STICK, SLIP, FRICTIONLESS)

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError
+from ..model.errors import InputError
 from .classify import CLASSIFY_RTOL, SLIP, classify_nodes
 from .mceip import mceip_mu
 

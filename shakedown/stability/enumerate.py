@@ -13,7 +13,7 @@ import itertools
 
 import numpy as np
 
-from ..errors import InputError
+from ..model.errors import InputError
 from .linear import restricted_eigenpairs
 from .pencil import SlipPencil
 from .result import VERIFY_TOL, MCEIPResult, make_result, no_solution

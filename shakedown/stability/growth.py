@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
-from ..errors import InputError
+from ..model.errors import InputError
 from .classify import NodePartition
 from .enumerate import MAX_ENUMERATION_NODES
 from .linear import restricted_eigenpairs

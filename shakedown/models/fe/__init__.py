@@ -1,0 +1,24 @@
+"""Finite-element models condensed onto their contact nodes (MODEL.md s.6), with scikit-fem.
+
+Pipeline: mesh (:func:`rectangle`, :func:`trapezoid`, :func:`polygon`, :func:`from_file`) +
+material (:func:`isotropic`, :func:`transversely_isotropic`) -> :class:`FEModel` (held,
+contact, interface and periodic boundaries; load cases) -> :meth:`FEModel.condense` ->
+:class:`CondensedModel` (``.system`` a :class:`shakedown.DiscreteSystem`, ``.load_cycle``,
+``.M``, ``.dynamic_stiffness``).  Frame and sign conventions: :mod:`shakedown.fe.condense`.
+"""
+
+from .analytic import layer_uniform_stiffness
+from .assembly import Body, BodyForce, Displacement, Pressure, Traction
+from .condense import FEModel
+from .condensed import CondensedModel
+from .materials import Material, isotropic, rotate_voigt, transversely_isotropic
+from .meshes import ELEMENTS, PATTERNS, FEMesh, from_file, rectangle, trapezoid
+from .polygons import polygon
+
+__all__ = [
+    "layer_uniform_stiffness",
+    "Body", "BodyForce", "Displacement", "Pressure", "Traction",
+    "CondensedModel", "FEModel",
+    "Material", "isotropic", "transversely_isotropic", "rotate_voigt",
+    "ELEMENTS", "PATTERNS", "FEMesh", "from_file", "polygon", "rectangle", "trapezoid",
+]

@@ -1,0 +1,309 @@
+"""Assembly of an :class:`~shakedown.fe.condense.FEModel` and its static condensation onto the
+contact DOFs: constraint maps, the factorised interior block, welded reactions, the Guyan
+mass and field recovery (frame and signs: :mod:`shakedown.fe.condense`).
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import scipy.sparse as sp
+
+from ...model.errors import InputError
+from .condensed import CondensedModel, factorize
+
+#: Memory budget [bytes] of the dense right-hand-side blocks ``K_ii^-1 K_ic[:, chunk]``.
+
+__all__ = ["Assembled"]
+
+
+#: Memory budget [bytes] of the dense right-hand-side blocks ``K_ii^-1 K_ic[:, chunk]``.
+RHS_BLOCK_BYTES = 64 * 2**20
+
+#: Largest ``K_ii^-1 K_ic`` [bytes] kept in memory at once for the Guyan mass.
+GUYAN_FULL_BYTES = 256 * 2**20
+
+
+
+def _sort_along(coords: np.ndarray, tangents: np.ndarray) -> np.ndarray:
+    """Order of boundary nodes along their mean tangent (counter-clockwise run)."""
+    t = tangents.mean(axis=0)
+    if np.linalg.norm(t) < 1e-12:
+        t = tangents[0]
+    return np.lexsort((coords @ np.array([-t[1], t[0]]), coords @ t))
+
+
+def _match(xa: np.ndarray, xb: np.ndarray, tol: float, what: str) -> np.ndarray:
+    """Index ``m`` with ``xb[m[k]] == xa[k]`` (within tol); clear error otherwise."""
+    from scipy.spatial import cKDTree
+
+    if len(xa) != len(xb):
+        raise InputError(
+            f"{what}: the two sides have {len(xa)} and {len(xb)} nodes; they must match "
+            "one to one (conforming meshes)"
+        )
+    d, m = cKDTree(xb).query(xa)
+    if np.any(d > tol) or np.unique(m).size != m.size:
+        k = int(np.argmax(d))
+        raise InputError(
+            f"{what}: node at {xa[k]} has no partner within {tol:.2g} (nearest {d[k]:.3g}); "
+            "the meshes of the two sides must match node to node"
+        )
+    return m
+
+
+class Assembled:
+    """Assembly, constraint map and factorization of an :class:`FEModel` (internal)."""
+
+    def __init__(self, model, mass: bool):
+        t0 = time.perf_counter()
+        self.model, self.with_mass = model, mass
+        bodies = model.bodies
+        self.offsets = np.cumsum([0] + [b.n_dofs for b in bodies])
+        n_full = int(self.offsets[-1])
+        diam = max(b.mesh.diameter for b in bodies)
+        tol = 1e-8 * diam
+        held = {}
+        for k, b in enumerate(bodies):
+            for d, tag in b.held_dofs().items():
+                held[int(self.offsets[k] + d)] = (k, *tag)
+        node_gdofs = [b.node_dofs + self.offsets[k] for k, b in enumerate(bodies)]
+
+        # periodic: slave global dof -> master global dof
+        alias = {}
+        for k, m_, s_ in model.periodic:
+            b = bodies[k]
+            nm, ns = b.boundary_nodes(m_), b.boundary_nodes(s_)
+            xm, xs = b.node_coordinates[nm], b.node_coordinates[ns]
+            shift = xs.mean(axis=0) - xm.mean(axis=0)
+            idx = _match(xs - shift, xm, tol, f"periodic sides {m_!r} -> {s_!r} of body {k}")
+            for s, m in zip(ns, nm[idx], strict=True):
+                for c in range(2):
+                    gs, gm = int(node_gdofs[k][s, c]), int(node_gdofs[k][m, c])
+                    if gs not in held:
+                        alias[gs] = gm
+        # contact nodes (rigid obstacle), then interface nodes
+        nodes = []  # (kind, body, node, normal, partner_body, partner_node)
+        taken = set()
+        for k, name in model.contact:
+            b = bodies[k]
+            nn, nrm = b.node_normals(name)
+            order = _sort_along(b.node_coordinates[nn], np.c_[-nrm[:, 1], nrm[:, 0]])
+            for j in order:
+                g = node_gdofs[k][nn[j]]
+                if (k, nn[j]) in taken or any(int(x) in held or int(x) in alias for x in g):
+                    continue
+                taken.add((k, int(nn[j])))
+                nodes.append(("contact", k, int(nn[j]), nrm[j], -1, -1))
+        for a, na, bb, nb_ in model.interfaces:
+            A, B = bodies[a], bodies[bb]
+            nn, nrm = A.node_normals(na)
+            mb = B.boundary_nodes(nb_)
+            idx = _match(A.node_coordinates[nn], B.node_coordinates[mb], tol,
+                         f"interface {na!r} (body {a}) / {nb_!r} (body {bb})")
+            order = _sort_along(A.node_coordinates[nn], np.c_[-nrm[:, 1], nrm[:, 0]])
+            for j in order:
+                g = node_gdofs[a][nn[j]]
+                if (a, nn[j]) in taken or any(int(x) in held or int(x) in alias for x in g):
+                    continue
+                taken.add((a, int(nn[j])))
+                nodes.append(("interface", a, int(nn[j]), nrm[j], bb, int(mb[idx[j]])))
+        N = len(nodes)
+        if N == 0:
+            raise InputError(
+                "no contact node is left: every node of the contact boundaries is held "
+                "(Dirichlet) or a periodic copy"
+            )
+        self.nodes = nodes
+        self.N = N
+        normals = np.array([nd[3] for nd in nodes])
+        tangents = np.c_[-normals[:, 1], normals[:, 0]]
+        self.normals, self.tangents = normals, tangents
+        self.coords = np.array([bodies[nd[1]].node_coordinates[nd[2]] for nd in nodes])
+
+        # rows of the map u = P z + P_D u_D, as dicts {column: coef}; columns: z then held
+        rows: dict[int, dict] = {}
+        frame_of = {}
+        for j, (_kind, k, node, nrm, _pb, _pn) in enumerate(nodes):
+            t = tangents[j]
+            for c in range(2):
+                frame_of[int(node_gdofs[k][node, c])] = (j, t[c], -nrm[c])
+        iface = {}
+        for kind, k, node, _nrm, pb, pn in nodes:
+            if kind == "interface":
+                for c in range(2):
+                    iface[int(node_gdofs[k][node, c])] = int(node_gdofs[pb][pn, c])
+        held_list = sorted(held)
+        self.held_list = held_list
+        held_col = {d: 2 * N + n_full + i for i, d in enumerate(held_list)}  # provisional
+        n_int = 0
+        int_col = {}
+        for d in range(n_full):
+            if d in held or d in alias or d in frame_of:
+                continue
+            int_col[d] = 2 * N + n_int
+            n_int += 1
+        for d, (j, ct, cn) in frame_of.items():
+            if d not in iface:
+                rows[d] = {j: ct, N + j: cn}
+        for d in held_list:
+            rows[d] = {held_col[d]: 1.0}
+        for d, col in int_col.items():
+            rows[d] = {col: 1.0}
+
+        def resolve(d, depth=0):
+            if d in rows:
+                return rows[d]
+            if depth > 50:
+                raise InputError("periodic / interface constraints form a cycle")
+            if d in alias:
+                r = dict(resolve(alias[d], depth + 1))
+            elif d in iface:
+                j, ct, cn = frame_of[d]
+                r = dict(resolve(iface[d], depth + 1))
+                r[j] = r.get(j, 0.0) + ct
+                r[N + j] = r.get(N + j, 0.0) + cn
+            else:  # pragma: no cover - every dof is classified above
+                raise AssertionError(d)
+            rows[d] = r
+            return r
+
+        for d in range(n_full):
+            resolve(d)
+        nz = 2 * N + n_int
+        I, J, V = [], [], []
+        for d, r in rows.items():
+            for col, val in r.items():
+                I.append(d)
+                J.append(col)
+                V.append(val)
+        I, J, V = np.array(I), np.array(J), np.array(V, dtype=float)
+        # compact the held columns to nz .. nz + n_held - 1
+        is_h = J >= nz
+        J[is_h] = nz + (J[is_h] - (2 * N + n_full))
+        P_all = sp.csr_matrix((V, (I, J)), shape=(n_full, nz + len(held_list)))
+        self.P, self.P_D = P_all[:, :nz].tocsc(), P_all[:, nz:].tocsc()
+        self.nz, self.n_int, self.n_full = nz, n_int, n_full
+        self._check_support(held, alias)
+
+        # assembly
+        self.K_full = sp.block_diag([b.stiffness() for b in bodies], format="csr")
+        self.M_full = (sp.block_diag([b.mass() for b in bodies], format="csr")
+                       if mass else None)
+        self.t_assembly = time.perf_counter() - t0
+        Kz = (self.P.T @ self.K_full @ self.P).tocsc()
+        c, i = slice(0, 2 * N), slice(2 * N, nz)
+        self.Kcc, self.Kci, self.Kii = Kz[c, c].toarray(), Kz[c, i].tocsc(), Kz[i, i].tocsc()
+        if mass:
+            Mz = (self.P.T @ self.M_full @ self.P).tocsc()
+            self.Mcc, self.Mci, self.Mii = Mz[c, c].toarray(), Mz[c, i].tocsc(), Mz[i, i].tocsc()
+        coupled = self.Kci if not mass else (abs(self.Kci) + abs(self.Mci))
+        self.boundary_layer = np.unique(coupled.nonzero()[1])
+        t1 = time.perf_counter()
+        self.lu = factorize(self.Kii, "K_ii", self.boundary_layer)
+        self.t_factor = time.perf_counter() - t1
+
+    def _check_support(self, held, alias):
+        """Each connected part of every body must be held, in contact or joined to one."""
+        from scipy.sparse.csgraph import connected_components
+
+        supported_parts = []
+        parts = []
+        support_dofs = set(held)
+        for nd in self.nodes:
+            for k, node in ((nd[1], nd[2]), (nd[4], nd[5])):
+                if k >= 0:  # the node and, at an interface, its partner
+                    support_dofs.add(int(self.model.bodies[k].node_dofs[node, 0]
+                                         + self.offsets[k]))
+        for k, b in enumerate(self.model.bodies):
+            m = b.mesh.mesh
+            nv = m.p.shape[1]
+            rows = np.repeat(np.arange(m.t.shape[1]), m.t.shape[0])
+            inc = sp.csr_matrix((np.ones(rows.size), (rows, m.t.T.ravel())),
+                                shape=(m.t.shape[1], nv))
+            n_comp, lab = connected_components(inc.T @ inc, directed=False)
+            verts_dofs = b.node_dofs[:nv] + self.offsets[k]
+            for comp in range(n_comp):
+                dofs = verts_dofs[lab == comp].ravel()
+                parts.append((k, comp))
+                supported_parts.append(any(int(d) in support_dofs for d in dofs))
+        if not all(supported_parts):
+            k, comp = parts[supported_parts.index(False)]
+            raise InputError(
+                f"body {k} (connected part {comp}) has rigid-body modes: it has no Dirichlet "
+                "part, no contact node and no interface; hold a boundary (dirichlet=[...]) or "
+                "add it to contact"
+            )
+
+    # ------------------------------------------------------------------ products
+    def guyan_mass(self):
+        """``T^T M T`` with ``T = [I; -X]``, ``X = K_ii^-1 K_ic`` (blocked by memory budget)."""
+        N2 = 2 * self.N
+        Mg = np.array(self.Mcc, copy=True)
+        Kic, Mic = self.Kci.T.tocsc(), self.Mci.T.tocsc()
+        n_i = max(self.n_int, 1)
+        if 8 * n_i * N2 <= GUYAN_FULL_BYTES:  # one pass: X in memory
+            X = self.lu.solve(Kic.toarray())
+            MX = self.Mci @ X
+            Mg += -MX - MX.T + X.T @ (self.Mii @ X)
+            return 0.5 * (Mg + Mg.T)
+        chunk = max(1, int(RHS_BLOCK_BYTES // (3 * 8 * n_i)))
+        for s in range(0, N2, chunk):
+            cols = slice(s, min(s + chunk, N2))
+            X = self.lu.solve(Kic[:, cols].toarray())
+            Y1 = self.lu.solve(Mic[:, cols].toarray())
+            Y2 = self.lu.solve(self.Mii @ X)
+            Mg[:, cols] += -(self.Mci @ X) - self.Kci @ Y1 + self.Kci @ Y2
+        return 0.5 * (Mg + Mg.T)
+
+    def load_rhs(self, case: str):
+        """``g = P^T (f - K P_D u_D)`` and the held values ``u_D`` of one load case."""
+        f = np.zeros(self.n_full)
+        uD = np.zeros(len(self.held_list))
+        pos = {d: i for i, d in enumerate(self.held_list)}
+        for k, b in enumerate(self.model.bodies):
+            if case in b.loads:
+                fk, pres = b.load_vector(b.loads[case])
+                f[self.offsets[k]:self.offsets[k + 1]] += fk
+                for d, val in pres.items():
+                    uD[pos[int(self.offsets[k] + d)]] = val
+        g = self.P.T @ (f - self.K_full @ (self.P_D @ uD))
+        return g, uD
+
+    def welded(self, case: str):
+        g, _ = self.load_rhs(case)
+        gc, gi = g[: 2 * self.N], g[2 * self.N:]
+        r = -(gc - self.Kci @ self.lu.solve(gi)) if self.n_int else -gc
+        return r[: self.N], r[self.N:]
+
+    def condensed(self) -> CondensedModel:
+        t0 = time.perf_counter()
+        S = self.Kcc - self.lu.schur_correction(self.Kci.T)
+        S = 0.5 * (S + S.T)
+        Mg = self.guyan_mass() if self.with_mass else None
+        welded = {case: self.welded(case) for case in self.model.load_cases}
+        t_cond = time.perf_counter() - t0
+        cm = CondensedModel(
+            model=self.model, K=S, M=Mg, node_coordinates=self.coords, normals=self.normals,
+            tangents=self.tangents,
+            node_body=np.array([nd[1] for nd in self.nodes]),
+            node_index=np.array([nd[2] for nd in self.nodes]),
+            node_kind=tuple(nd[0] for nd in self.nodes), welded=welded, from_cache=False,
+            timings={"assembly": self.t_assembly, "factorization": self.t_factor,
+                     "condensation": t_cond},
+            counts={"n_full_dofs": self.n_full, "n_interior_dofs": self.n_int,
+                    "n_contact_nodes": self.N, "nnz_K_ii": int(self.Kii.nnz)},
+        )
+        cm._lazy["assembled"] = self
+        return cm
+
+    # ------------------------------------------------------------------ recovery
+    def displacements(self, zc: np.ndarray, case: str | None):
+        g, uD = self.load_rhs(case) if case is not None else (np.zeros(self.nz), None)
+        gi = g[2 * self.N:]
+        zi = self.lu.solve(gi - self.Kci.T @ zc) if self.n_int else np.zeros(0)
+        u = self.P @ np.concatenate([zc, zi])
+        if uD is not None:
+            u += self.P_D @ uD
+        return [u[self.offsets[k]:self.offsets[k + 1]] for k in range(len(self.model.bodies))]

@@ -1,0 +1,245 @@
+"""Linear elastic materials for 2-D (plane strain / plane stress) FE models.
+
+The in-plane stiffness ``D`` maps the engineering strain ``(eps_xx, eps_yy, gamma_xy)``
+(``gamma_xy = 2 eps_xy``) to the stress ``(sig_xx, sig_yy, sig_xy)``, i.e. Voigt order
+``(xx, yy, xy)``.  In the notation of seed ``001`` (Agwa & Pinto da Costa 2007),
+``D44 = C_xyxy = D[2, 2]`` and ``D24 = C_yyxy = D[1, 2]`` (y = contact normal).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ...model.errors import InputError
+
+_PLANES = ("strain", "stress")
+_VOIGT = {(0, 0): 0, (1, 1): 1, (0, 1): 2, (1, 0): 2}
+
+
+@dataclass(frozen=True, eq=False)
+class Material:
+    """A homogeneous linear elastic material in 2-D.
+
+    Attributes
+    ----------
+    D : ndarray, shape (3, 3)
+        In-plane stiffness in Voigt order ``(xx, yy, xy)`` with engineering shear strain
+        [stress].  Symmetric positive definite.
+    density : float
+        Mass density [mass / volume]; used for the consistent mass matrix.
+    plane : {"strain", "stress"}
+    name : str
+        ``"isotropic"`` or ``"transversely_isotropic"``.
+    parameters : dict
+        The constructor's arguments (used for the cache key and for reports).
+    """
+
+    D: np.ndarray
+    density: float
+    plane: str
+    name: str
+    parameters: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        D = np.array(self.D, dtype=float)
+        if D.shape != (3, 3) or not np.all(np.isfinite(D)):
+            raise InputError(f"D must be a finite (3, 3) array; got shape {D.shape}")
+        if np.abs(D - D.T).max() > 1e-12 * np.abs(D).max():
+            raise InputError("D must be symmetric")
+        if np.linalg.eigvalsh(0.5 * (D + D.T))[0] <= 0:
+            raise InputError(
+                f"the in-plane stiffness D of the {self.name} material is not positive "
+                f"definite (eigenvalues {np.linalg.eigvalsh(D)}); check the elastic constants"
+            )
+        if not (np.isfinite(self.density) and self.density > 0):
+            raise InputError(f"density must be > 0; got {self.density!r}")
+        D = 0.5 * (D + D.T)
+        D.setflags(write=False)
+        object.__setattr__(self, "D", D)
+
+    @property
+    def D44(self) -> float:
+        """``C_xyxy`` (shear stiffness in the x-y frame), seed 001 notation."""
+        return float(self.D[2, 2])
+
+    @property
+    def D24(self) -> float:
+        """``C_yyxy`` (normal stress on y-faces per unit shear strain), seed 001 notation."""
+        return float(self.D[1, 2])
+
+    def layer_critical_friction(self) -> float:
+        """``D44 / |D24|``: critical friction of the infinite layer (seed 001, s.3).
+
+        ``inf`` when ``D24 = 0`` (e.g. isotropic: never directionally unstable).
+        """
+        d24 = abs(self.D24)
+        if d24 <= 1e-14 * np.abs(self.D).max():
+            return float("inf")
+        return self.D44 / d24
+
+    def key(self) -> dict:
+        """JSON-able description (cache key)."""
+        return {
+            "name": self.name,
+            "plane": self.plane,
+            "density": float(self.density),
+            "D": [float(x) for x in self.D.ravel()],
+        }
+
+    def __repr__(self) -> str:
+        args = ", ".join(f"{k}={v:g}" for k, v in self.parameters.items() if k != "plane")
+        return f"Material({self.name}, plane {self.plane}, {args})"
+
+
+def _check_plane(plane: str) -> str:
+    if plane not in _PLANES:
+        raise InputError(f"plane must be 'strain' or 'stress'; got {plane!r}")
+    return plane
+
+
+def _positive(name: str, value) -> float:
+    try:
+        x = float(value)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{name} must be a number; got {value!r}") from exc
+    if not (np.isfinite(x) and x > 0):
+        raise InputError(f"{name} must be > 0; got {value!r}")
+    return x
+
+
+def _in_plane(C6: np.ndarray, plane: str) -> np.ndarray:
+    """3x3 in-plane stiffness (11, 22, 12) from the 6x6 Voigt stiffness (11,22,33,23,13,12)."""
+    idx = [0, 1, 5]
+    if plane == "strain":
+        return C6[np.ix_(idx, idx)]
+    S6 = np.linalg.inv(C6)
+    return np.linalg.inv(S6[np.ix_(idx, idx)])
+
+
+def rotate_voigt(D: np.ndarray, theta: float) -> np.ndarray:
+    """In-plane stiffness of a material whose axes are turned by ``theta`` [rad] from x, y.
+
+    ``D`` is given in the material axes ``(p1, p2)``; ``p1 = (cos theta, sin theta)``.  The
+    fourth-order tensor is rotated, ``C'_ijkl = R_ia R_jb R_kc R_ld C_abcd``.
+    """
+    T = np.zeros((2, 2, 2, 2))
+    for (i, j), a in _VOIGT.items():
+        for (k, l), b in _VOIGT.items():
+            T[i, j, k, l] = D[a, b]
+    c, s = np.cos(theta), np.sin(theta)
+    R = np.array([[c, -s], [s, c]])
+    T = np.einsum("ia,jb,kc,ld,abcd->ijkl", R, R, R, R, T)
+    pairs = [(0, 0), (1, 1), (0, 1)]
+    return np.array([[T[i, j, k, l] for (k, l) in pairs] for (i, j) in pairs])
+
+
+def isotropic(E: float, nu: float, plane: str = "strain", density: float = 1.0) -> Material:
+    """Isotropic material.
+
+    Parameters
+    ----------
+    E : float
+        Young's modulus [stress], ``> 0``.
+    nu : float
+        Poisson ratio, ``-1 < nu < 0.5``.
+    plane : {"strain", "stress"}
+    density : float
+        Mass density [mass / volume].
+
+    Examples
+    --------
+    >>> from shakedown import fe
+    >>> mat = fe.isotropic(1.0, 0.3)
+    >>> round(mat.D44, 6)   # shear modulus E / (2 (1 + nu))
+    0.384615
+    """
+    E = _positive("E", E)
+    plane = _check_plane(plane)
+    try:
+        nu = float(nu)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"nu must be a number; got {nu!r}") from exc
+    if not (-1.0 < nu < 0.5):
+        raise InputError(
+            f"nu must satisfy -1 < nu < 0.5 (positive definite elasticity); got nu = {nu}"
+        )
+    if plane == "strain":
+        f = E / ((1 + nu) * (1 - 2 * nu))
+        D = f * np.array([[1 - nu, nu, 0], [nu, 1 - nu, 0], [0, 0, (1 - 2 * nu) / 2]])
+    else:
+        f = E / (1 - nu**2)
+        D = f * np.array([[1, nu, 0], [nu, 1, 0], [0, 0, (1 - nu) / 2]])
+    return Material(
+        D, _positive("density", density), plane, "isotropic",
+        {"E": E, "nu": nu, "plane": plane, "density": float(density)},
+    )
+
+
+def transversely_isotropic(
+    E1: float,
+    E2: float,
+    nu12: float,
+    nu23: float,
+    G12: float,
+    theta: float,
+    plane: str = "strain",
+    density: float = 1.0,
+) -> Material:
+    """Transversely isotropic material with the stiff axis ``p1`` in the x-y plane (seed 001).
+
+    The plane of isotropy is ``p2``-``e3`` (``E3 = E2``, ``nu13 = nu12``, ``G13 = G12``,
+    ``G23 = E2 / (2 (1 + nu23))``); ``p1 = (cos theta, sin theta)``.
+
+    Parameters
+    ----------
+    E1, E2 : float
+        Young's moduli along ``p1`` and in the plane of isotropy [stress].
+    nu12, nu23 : float
+        Poisson ratios (``nu12``: contraction along ``p2`` for a pull along ``p1``).
+    G12 : float
+        Shear modulus in the ``p1``-``p2`` plane [stress].
+    theta : float
+        Angle of ``p1`` from the x axis [rad].
+    plane : {"strain", "stress"}
+    density : float
+
+    Raises
+    ------
+    InputError
+        If the 3-D compliance is not positive definite (inconsistent constants).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from shakedown import fe
+    >>> m = fe.transversely_isotropic(8, 1, 0.4, 0.3, 0.1, np.deg2rad(80))
+    >>> round(m.layer_critical_friction(), 7)   # seed 001: 0.2629238
+    0.2629238
+    """
+    E1, E2, G12 = _positive("E1", E1), _positive("E2", E2), _positive("G12", G12)
+    plane = _check_plane(plane)
+    nu12, nu23, theta = float(nu12), float(nu23), float(theta)
+    if not np.isfinite(theta):
+        raise InputError(f"theta must be finite (radians); got {theta}")
+    if not (-1.0 < nu23 < 1.0):
+        raise InputError(f"nu23 must satisfy -1 < nu23 < 1 (G23 > 0); got {nu23}")
+    S = np.zeros((6, 6))
+    S[0, 0] = 1 / E1
+    S[1, 1] = S[2, 2] = 1 / E2
+    S[0, 1] = S[1, 0] = S[0, 2] = S[2, 0] = -nu12 / E1
+    S[1, 2] = S[2, 1] = -nu23 / E2
+    S[3, 3] = 2 * (1 + nu23) / E2
+    S[4, 4] = S[5, 5] = 1 / G12
+    ev = np.linalg.eigvalsh(S)
+    if ev[0] <= 0:
+        raise InputError(
+            "the compliance of the transversely isotropic material is not positive definite "
+            f"(smallest eigenvalue {ev[0]:.3g}) for E1={E1}, E2={E2}, nu12={nu12}, "
+            f"nu23={nu23}: need |nu23| < 1 and nu12^2 < E1 (1 - nu23) / (2 E2)"
+        )
+    D = rotate_voigt(_in_plane(np.linalg.inv(S), plane), theta)
+    params = {"E1": E1, "E2": E2, "nu12": nu12, "nu23": nu23, "G12": G12, "theta": theta,
+              "plane": plane, "density": float(density)}
+    return Material(D, _positive("density", density), plane, "transversely_isotropic", params)

@@ -1,0 +1,325 @@
+"""The ``cycles`` analysis: cyclic evolution, steady cycle, dissipation; uniqueness studies.
+
+``[analyses.cycles]`` runs :func:`shakedown.solve_cycles` from one initial state (or the direct
+:func:`shakedown.steady_cycle` solver with ``steady_solver = true``) and writes
+
+* ``cycles.json`` -- the summary (steady ``W``, period, shook down, stuck nodes, counts, status),
+* ``dissipation.csv`` -- ``W`` and the change of state of every cycle,
+* ``steady_cycle.csv`` -- the steady cycle's time series (t, node, slip, gap, q, p, state),
+* ``dissipation.png``, ``steady_cycle.png``, ``node_states.png`` and, for two nodes,
+  ``trajectory.png`` (v space) and ``trajectory_tau.png`` (tau = A v space).
+
+With ``n_initial_states > 1`` (or several ``initial_slips``) it also runs a uniqueness study
+(:func:`shakedown.uniqueness_study`) and writes ``uniqueness.csv`` and ``uniqueness.png``; the
+single-run outputs are then those of the first initial state.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from ...model.errors import SceneError, SolverError
+
+OPTIONS = {
+    "lam": (float, 1.0, "load factor lam >= 0"),
+    "method": (str, "implicit", "time integration: 'implicit' or 'events'"),
+    "steps_per_cycle": (int, 200, "implicit steps per load cycle (>= 2)"),
+    "max_cycles": (int, 200, "largest number of cycles simulated per run"),
+    "tol": (float, 1e-10, "relative change of the cycle-start state that counts as steady"),
+    "initial_slip": (list, [], "initial slip of every node (empty: zeros)"),
+    "initial_slips": (list, [], "several initial states (list of lists): a uniqueness study"),
+    "n_initial_states": (int, 1, "> 1: a uniqueness study from this many sampled states"),
+    "seed": (int, 0, "seed of the sampled initial states"),
+    "sampling_scale": (float, 2.0, "box of the sampled states, in natural slips f p0 / A_jj"),
+    "n_jobs": (int, 1, "worker processes of the uniqueness study (0: all cores)"),
+    "steady_solver": (bool, False, "find the steady cycle as a fixed point (steady_cycle)"),
+    "log_scale": (bool, False, "logarithmic W axis in dissipation.png"),
+    "plots": (bool, True, "write PNG plots"),
+}
+
+
+def _vector(name, value, n):
+    try:
+        v = np.array(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise SceneError(f"[analyses.cycles] key {name!r} must be numbers; got {value!r}") from exc
+    if v.shape != (n,):
+        raise SceneError(
+            f"[analyses.cycles] key {name!r} must list one slip per node ({n}); got {value!r}"
+        )
+    return v
+
+
+def _check(options, n):
+    if options["lam"] < 0:
+        raise SceneError(f"[analyses.cycles] key 'lam' must be >= 0; got {options['lam']}")
+    if options["method"] not in ("implicit", "events"):
+        raise SceneError(
+            f"[analyses.cycles] key 'method' must be 'implicit' or 'events'; got "
+            f"{options['method']!r}"
+        )
+    for key, low in (("steps_per_cycle", 2), ("max_cycles", 1), ("n_initial_states", 1),
+                     ("n_jobs", 0)):
+        if options[key] < low:
+            raise SceneError(f"[analyses.cycles] key {key!r} must be >= {low}; got {options[key]}")
+    v0 = _vector("initial_slip", options["initial_slip"], n) if options["initial_slip"] else None
+    states = None
+    if options["initial_slips"]:
+        states = np.array([_vector("initial_slips", s, n) for s in options["initial_slips"]])
+    return v0, states
+
+
+def run(ctx, options: dict) -> dict:
+    from ...evolution import steady_cycle, uniqueness_study
+    from ...evolution.cycles import solve_cycles
+
+    system, load = ctx.system, ctx.load
+    n = system.n_nodes
+    v0, states = _check(options, n)
+    lam = float(options["lam"])
+    solver = dict(method=options["method"], steps_per_cycle=options["steps_per_cycle"],
+                  tol=options["tol"])
+    study = None
+    if states is not None or options["n_initial_states"] > 1:
+        if states is None:
+            count = options["n_initial_states"]
+            states = count  # sampled inside uniqueness_study
+        study = uniqueness_study(
+            system, load, lam, states, rng=options["seed"], n_jobs=options["n_jobs"] or None,
+            max_cycles=options["max_cycles"], scale=options["sampling_scale"],
+            solver="steady" if options["steady_solver"] else "cycles",
+            progress=ctx.progress, **solver,
+        )
+        ctx.output.write_table("uniqueness.csv", _from_one(study.table))
+        v0 = study.table[[f"initial_slip_{j}" for j in range(n)]].to_numpy(float)[0]
+    sc = None
+    if options["steady_solver"]:
+        ctx.log("direct steady-cycle solver (fixed point of the period map)")
+        sc = steady_cycle(system, load, lam, v0, max_evaluations=options["max_cycles"], **solver)
+        ctx.log(f"steady_cycle: {sc.status}: {sc.message}; {sc.n_evaluations} periods simulated")
+        run_ = sc.run
+    else:
+        desc = f"cycles at lam = {lam:.4g} (stops at a steady state)"
+        with _CycleProgress(ctx, options["max_cycles"], desc, _units(ctx)["energy"]) as cb:
+            run_ = solve_cycles(system, load, lam, initial_slip=v0,
+                                max_cycles=options["max_cycles"], progress=cb,
+                                record_history=n == 2 and options["plots"], **solver)
+    if run_ is not None and run_.status == "non_finite":  # overflow is a failure (issue 10)
+        raise SolverError(f"[analyses.cycles] lam = {lam:g}: {run_.message}", partial=run_)
+    summary = _summary(run_, lam, options, sc, study)
+    verdict = cycles_verdict(run_, lam, _units(ctx)["energy"], study)
+    summary = {"verdict": verdict, **summary}
+    ctx.output.write_json("cycles.json", summary)
+    ctx.output.write_table("dissipation.csv", _dissipation_table(run_))
+    steady = run_.steady_table if run_.steady_table is not None else pd.DataFrame()
+    ctx.output.write_table("steady_cycle.csv", _from_one(steady))
+    if options["plots"]:
+        _plots(ctx, run_, study, lam, options)
+    keys = ("verdict", "steady_dissipation", "period", "shook_down", "stuck_nodes", "n_cycles",
+            "status")
+    out = {k: summary[k] for k in keys}
+    if getattr(run_, "within_sampling_error", False):
+        out["sampling_warning"] = run_.message  # the verdict lies within the sampling error
+    if study is not None:
+        out.update(unique_dissipation=study.unique_dissipation,
+                   dissipation_spread=study.dissipation_spread,
+                   fraction_shook_down=study.fraction_shook_down)
+    return out
+
+
+class _CycleProgress:
+    """Drives one progress bar from ``solve_cycles``'s ``progress(cycle, max_cycles, W)`` callback."""
+
+    def __init__(self, ctx, total, desc, energy):
+        bar = getattr(ctx.progress, "bar", None)
+        self._bar = bar(total=total, desc=desc, unit="cycle") if bar else None
+        self._energy = energy
+
+    def __call__(self, cycle, max_cycles, W):
+        if self._bar is not None:
+            self._bar.set_postfix_str(f"W = {W:.4g} {self._energy}", refresh=False)
+            self._bar.update(1)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        if self._bar is not None:
+            self._bar.close()
+        return False
+
+
+def _from_one(table):
+    """A copy of a result table with nodes numbered from 1 (columns ``node``, ``stuck``,
+    ``initial_slip_<j>``, ``steady_slip_<j>``), as in everything a person reads."""
+    import re
+
+    t = table.copy()
+    if "node" in t:
+        t["node"] = t["node"].astype(int) + 1
+    if "stuck" in t:
+        t["stuck"] = [",".join(str(int(j) + 1) for j in str(x).split(",") if j.strip() != "")
+                      for x in t["stuck"]]
+    pattern = re.compile(r"^(initial_slip|steady_slip|slip|gap)_(\d+)$")
+    return t.rename(columns=lambda c: pattern.sub(lambda m: f"{m[1]}_{int(m[2]) + 1}", c))
+
+
+def _dissipation_table(run):
+    W = np.asarray(run.dissipation, float)
+    change = np.asarray(getattr(run, "state_change", np.full(W.size, np.nan)), float)
+    if change.size != W.size:
+        change = np.resize(change, W.size) if change.size else np.full(W.size, np.nan)
+    return pd.DataFrame({"cycle": np.arange(1, W.size + 1), "W": W, "state_change": change})
+
+
+def _summary(run, lam, options, sc, study):
+    d = {
+        "lam": lam,
+        "method": options["method"],
+        "steps_per_cycle": options["steps_per_cycle"],
+        "steady_dissipation": float(run.steady_dissipation),
+        "period": int(run.period),
+        "shook_down": bool(run.shook_down),
+        "stuck_nodes": [int(j) + 1 for j in np.atleast_1d(run.stuck_nodes)],
+        "node_numbering": "from 1",
+        "n_cycles": int(run.n_cycles),
+        "cycles_to_steady": getattr(run, "cycles_to_steady", None),
+        "status": str(run.status),
+        "message": str(getattr(run, "message", "")),
+        "max_residual": getattr(run, "max_residual", None),
+        "energy_identity": getattr(run, "energy_identity", None),
+        "final_slip": np.asarray(run.final_slip, float),
+    }
+    if sc is not None:
+        d["steady_solver"] = {
+            "status": sc.status, "message": sc.message, "n_evaluations": sc.n_evaluations,
+            "n_iterations": sc.n_iterations, "residual": sc.residual, "method": sc.method,
+        }
+        d["status"] = sc.status
+    if study is not None:
+        d["uniqueness"] = {
+            "n_states": study.n_states,
+            "unique_dissipation": study.unique_dissipation,
+            "dissipation_spread": study.dissipation_spread,
+            "time_varying_spread": study.time_varying_spread,
+            "slip_spread": study.slip_spread,
+            "reaction_spread": study.reaction_spread,
+            "fraction_shook_down": study.fraction_shook_down,
+            "fraction_steady": study.fraction_steady,
+            "summary": study.summary(),
+        }
+    for k, v in list(d.items()):
+        if hasattr(v, "item") and np.ndim(v) == 0:
+            d[k] = v.item()
+        elif not isinstance(v, (dict, list, str, int, float, bool, np.ndarray, type(None))):
+            d[k] = str(v)
+    return d
+
+
+def _units(ctx) -> dict:
+    scene = getattr(ctx, "scene", None)
+    if scene is not None:
+        return scene.units
+    return {"force": "[force]", "length": "[length]", "energy": "[force x length]"}
+
+
+def _slipping_nodes(run) -> list[int]:
+    """Nodes (numbered from 1) that slip somewhere in the steady cycle."""
+    t = run.steady_table
+    if t is None or len(t) == 0 or "state" not in t:
+        return []
+    slipping = t[t["state"].isin(["forward", "backward"])]["node"].unique()
+    return sorted(int(j) + 1 for j in slipping)
+
+
+def _node_list(nodes) -> str:
+    nodes = [str(j) for j in nodes]
+    word = "node" if len(nodes) == 1 else "nodes"
+    return f"{word} {', '.join(nodes[:12])}" + (", ..." if len(nodes) > 12 else "")
+
+
+def cycles_verdict(run, lam: float, energy: str = "[force x length]", study=None) -> str:
+    """Plain sentences: shook down after k cycles / cyclic slip with W per cycle / no steady state.
+
+    Parameters
+    ----------
+    run : CycleRun
+    lam : float
+        Load factor of the run.
+    energy : str
+        Unit of energy (force x length) for ``W``.
+    study : UniquenessStudy, optional
+        Adds a sentence on whether the dissipation depends on the initial state.
+    """
+    at = f"At lam = {lam:.4g}"
+    if run.status == "periodic" and run.shook_down:
+        k = max(int(run.cycles_to_steady), 0)
+        when = "from the first cycle on" if k == 0 else f"after {k} cycle{'s' * (k != 1)}"
+        text = f"{at}, it shook down {when}: no node slips in the steady state (W = 0)."
+    elif run.status == "periodic":
+        slip = _slipping_nodes(run)
+        text = (f"{at}, cyclic slip: W = {run.steady_dissipation:.4g} {energy} per cycle, "
+                f"period {int(run.period)}"
+                + (f", {_node_list(slip)} slip" if slip else "") + ".")
+    elif run.status == "not_converged":
+        W = np.asarray(run.dissipation, float)
+        last = f" (last cycle: W = {W[-1]:.4g} {energy})" if W.size else ""
+        text = (f"{at}, it did not reach a steady state in {int(run.n_cycles)} cycles{last}; "
+                "raise max_cycles to go on.")
+    else:
+        text = f"{at}, the run stopped before a steady state: {run.message}"
+    if study is not None:
+        t = study.table
+        W = t["steady_dissipation"].to_numpy(float)
+        n = int(study.n_states)
+        if study.unique_dissipation:
+            text += (f" From {n} initial states the steady dissipation is the same "
+                     f"(spread {study.dissipation_spread:.3g} {energy}).")
+        elif np.isfinite(W).any():
+            text += (f" From {n} initial states the steady dissipation differs: W from "
+                     f"{np.nanmin(W):.4g} to {np.nanmax(W):.4g} {energy} per cycle "
+                     f"({study.fraction_shook_down:.0%} of them shook down); the initial state "
+                     "matters.")
+        else:
+            text += f" None of the {n} initial states reached a steady state."
+    return text
+
+
+def _plots(ctx, run, study, lam, options):
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    from ...plotting.cycles import (
+        plot_dissipation,
+        plot_node_states,
+        plot_steady_cycle,
+        plot_trajectory,
+        plot_uniqueness,
+    )
+
+    fig, ax = plt.subplots(figsize=(6, 4))
+    plot_dissipation(run, ax, log=options["log_scale"])
+    ax.set_title(f"dissipation per cycle, lam = {lam:g}")
+    ctx.output.save_figure("dissipation.png", fig)
+    has_steady = run.steady_table is not None and len(run.steady_table) > 0
+    if has_steady:
+        fig, axs = plt.subplots(2, 1, sharex=True, figsize=(6.4, 5.6))
+        plot_steady_cycle(run, axs)
+        ctx.output.save_figure("steady_cycle.png", fig)
+        fig, ax = plt.subplots(figsize=(6.4, 3.5))
+        plot_node_states(run, ax)
+        ctx.output.save_figure("node_states.png", fig)
+    else:
+        ctx.log("no steady cycle reached: steady_cycle.png and node_states.png not written")
+    if ctx.system.n_nodes == 2:
+        for space, name in (("v", "trajectory.png"), ("tau", "trajectory_tau.png")):
+            fig, ax = plt.subplots(figsize=(5.5, 5))
+            plot_trajectory(ctx.system, ctx.load, lam, run, ax, space=space)
+            ctx.output.save_figure(name, fig)
+    if study is not None:
+        fig, ax = plt.subplots(figsize=(6, 4))
+        plot_uniqueness(study, ax)
+        ctx.output.save_figure("uniqueness.png", fig)

@@ -1,0 +1,180 @@
+"""Scene model kind ``"fe"``: a 2-D elastic body condensed onto its contact nodes.
+
+``[model]`` keys
+    ``geometry`` : ``"rectangle"`` | ``"trapezoid"`` | ``"polygon"`` | ``"mesh_file"``;
+    rectangle: ``width``, ``height``; trapezoid: ``bottom_width``, ``top_width``, ``height``,
+    ``top_offset`` (optional); both: ``nx``, ``ny`` (cells), ``pattern``; polygon:
+    ``vertices`` ([[x, y], ...]), ``side_names``, ``refine``; mesh_file: ``file`` (beside
+    the scene, read by meshio) and ``boundaries`` ({name = [[x0, y0], [x1, y1]]} segments);
+    ``element`` : ``"P1"`` | ``"P2"`` | ``"Q1"``;
+    ``material`` : table with ``type = "isotropic"`` (``E``, ``nu``) or
+    ``"transversely_isotropic"`` (``E1``, ``E2``, ``nu12``, ``nu23``, ``G12``, ``theta_deg``),
+    plus ``plane`` (``"strain"``/``"stress"``) and ``density``;
+    ``dirichlet`` : list of boundary names (or {name = "x" | "y" | "xy"});
+    ``contact`` : list of boundary names; ``periodic`` : [master, slave];
+    ``friction`` : number or list of N; ``mass`` : bool (condense the mass);
+    ``thickness`` : number; ``cache_dir`` : name of the on-disk cache folder, created inside
+    the output folder (a second run with the same output folder reads the condensed model).
+``[load]`` tables ``static``, ``cyclic`` (cos amplitude), ``cyclic_sin`` (sin amplitude), each
+    with ``traction`` ({boundary = [t_x, t_y]}), ``pressure`` ({boundary = p}, compression
+    positive), ``body_force`` ([b_x, b_y]), ``displacement`` ({dirichlet boundary = [u_x, u_y]}).
+
+The builder returns ``(system, load_cycle, condensed_model)``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ...model.errors import InputError, SceneError
+
+GEOMETRIES = ("rectangle", "trapezoid", "polygon", "mesh_file")
+MODEL_KEYS = (
+    "geometry", "width", "height", "bottom_width", "top_width", "top_offset", "nx", "ny",
+    "pattern", "vertices", "side_names", "refine", "file", "boundaries", "element", "material",
+    "dirichlet", "contact", "periodic", "friction", "mass", "thickness", "cache_dir",
+)
+GEOMETRY_KEYS = {
+    "rectangle": ("width", "height", "nx", "ny"),
+    "trapezoid": ("bottom_width", "top_width", "height", "nx", "ny"),
+    "polygon": ("vertices",),
+    "mesh_file": ("file",),
+}
+LOAD_TABLES = ("static", "cyclic", "cyclic_sin")
+LOAD_KINDS = ("traction", "pressure", "body_force", "displacement")
+ISO_KEYS = ("type", "E", "nu", "plane", "density")
+TI_KEYS = ("type", "E1", "E2", "nu12", "nu23", "G12", "theta_deg", "plane", "density")
+
+
+def _require(table: dict, keys, where: str):
+    for k in keys:
+        if k not in table:
+            raise SceneError(f"[{where}] key {k!r} is missing (needed here)")
+
+
+def _mesh(model: dict, scene_dir: Path):
+    from ...models import fe
+
+    geometry = model.get("geometry", "rectangle")
+    if geometry not in GEOMETRIES:
+        raise SceneError(f"[model] key 'geometry' = {geometry!r} is not allowed; "
+                         f"allowed: {', '.join(GEOMETRIES)}")
+    _require(model, GEOMETRY_KEYS[geometry], "model")
+    element = model.get("element", "P1")
+    pattern = model.get("pattern", "union-jack")
+    if geometry == "rectangle":
+        return fe.rectangle(model["width"], model["height"], model["nx"], model["ny"],
+                            element=element, pattern=pattern)
+    if geometry == "trapezoid":
+        return fe.trapezoid(model["bottom_width"], model["top_width"], model["height"],
+                            model["nx"], model["ny"], top_offset=model.get("top_offset"),
+                            element=element, pattern=pattern)
+    if geometry == "polygon":
+        return fe.polygon(model["vertices"], refine=int(model.get("refine", 3)),
+                          element=element, side_names=model.get("side_names"))
+    path = scene_dir / str(model["file"])
+    return fe.from_file(path, element=model.get("element"), boundaries=model.get("boundaries"))
+
+
+def _material(spec):
+    from ...models import fe
+
+    if not isinstance(spec, dict) or "type" not in spec:
+        raise SceneError("[model] key 'material' must be a table with 'type' = 'isotropic' or "
+                         f"'transversely_isotropic'; got {spec!r}")
+    kind = spec["type"]
+    allowed = {"isotropic": ISO_KEYS, "transversely_isotropic": TI_KEYS}.get(kind)
+    if allowed is None:
+        raise SceneError(f"[model.material] key 'type' = {kind!r} is not allowed; allowed: "
+                         "isotropic, transversely_isotropic")
+    for k in spec:
+        if k not in allowed:
+            raise SceneError(f"[model.material] key {k!r} is not allowed for type {kind!r}; "
+                             f"allowed: {', '.join(allowed)}")
+    extra = {k: spec[k] for k in ("plane", "density") if k in spec}
+    if kind == "isotropic":
+        _require(spec, ("E", "nu"), "model.material")
+        return fe.isotropic(spec["E"], spec["nu"], **extra)
+    _require(spec, TI_KEYS[1:7], "model.material")
+    return fe.transversely_isotropic(spec["E1"], spec["E2"], spec["nu12"], spec["nu23"],
+                                     spec["G12"], np.deg2rad(float(spec["theta_deg"])), **extra)
+
+
+def _load_cases(load: dict) -> dict:
+    from ...models import fe
+
+    for k in load:
+        if k not in LOAD_TABLES:
+            raise SceneError(f"[load] key {k!r} is not allowed for kind 'fe'; allowed tables: "
+                             f"{', '.join(LOAD_TABLES)}")
+    cases = {}
+    for name in LOAD_TABLES:
+        table = load.get(name)
+        if table is None:
+            continue
+        if not isinstance(table, dict):
+            raise SceneError(f"[load] key {name!r} must be a table with keys "
+                             f"{', '.join(LOAD_KINDS)}")
+        items = []
+        for kind, spec in table.items():
+            if kind not in LOAD_KINDS:
+                raise SceneError(f"[load.{name}] key {kind!r} is not allowed; allowed: "
+                                 f"{', '.join(LOAD_KINDS)}")
+            if kind == "body_force":
+                items.append(fe.BodyForce(spec))
+                continue
+            if not isinstance(spec, dict):
+                raise SceneError(f"[load.{name}] key {kind!r} must be a table "
+                                 "{boundary = value}")
+            cls = {"traction": fe.Traction, "pressure": fe.Pressure,
+                   "displacement": fe.Displacement}[kind]
+            items += [cls(boundary, value) for boundary, value in spec.items()]
+        cases[name] = items
+    return cases
+
+
+def build(model: dict, load: dict, scene_dir: Path, cache_root: Path | None = None):
+    """Build ``(DiscreteSystem, LoadCycle, CondensedModel)`` from the ``[model]``/``[load]`` tables.
+
+    A relative ``cache_dir`` is resolved inside ``cache_root`` (the run's output folder, given by
+    the scene runner) so that nothing is written outside it; without ``cache_root`` no cache is used.
+    """
+    from ...models import fe
+    from ..output import check_plain_name
+
+    for key in model:
+        if key not in MODEL_KEYS:
+            raise SceneError(f"[model] key {key!r} is not allowed for kind 'fe'; "
+                             f"allowed: {', '.join(MODEL_KEYS)}")
+    _require(model, ("material", "contact"), "model")
+    try:
+        mesh = _mesh(model, Path(scene_dir))
+        material = _material(model["material"])
+        periodic = model.get("periodic")
+        fem = fe.FEModel(
+            mesh, material, dirichlet=model.get("dirichlet"), contact=model["contact"],
+            loads=_load_cases(load or {}), friction=model.get("friction", 0.0),
+            periodic=tuple(periodic) if periodic else None,
+            thickness=float(model.get("thickness", 1.0)),
+        )
+        cache_dir = model.get("cache_dir")
+        if cache_dir and cache_root is not None:
+            # a plain folder name inside the output folder ('..' would leave it)
+            name = check_plain_name(Path(str(cache_dir)).name, "[model] key 'cache_dir'")
+            cache_path = Path(cache_root) / name
+        else:
+            cache_path = None
+        cm = fem.condense(mass=bool(model.get("mass", False)), cache_dir=cache_path)
+        cycle = cm.load_cycle(
+            static="static" if "static" in cm.welded else None,
+            cyclic="cyclic" if "cyclic" in cm.welded else None,
+            cyclic_sin="cyclic_sin" if "cyclic_sin" in cm.welded else None,
+        )
+        system = cm.system
+    except SceneError:
+        raise
+    except InputError as exc:
+        raise SceneError(f"[model] (kind 'fe') {exc}") from None
+    return system, cycle, cm
