@@ -18,7 +18,7 @@ import numpy as np
 
 import shakedown as sd
 from shakedown.models.half_plane import continuum as cont
-from shakedown.models.half_plane.studies import beta_study, contact_subsystem
+from shakedown.studies.half_plane import beta_study, contact_subsystem
 
 E, NU, R, F = 1.0, 0.3, 1.0, 0.5
 E_STAR = E / (2 * (1 - NU**2))

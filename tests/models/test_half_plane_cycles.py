@@ -133,7 +133,7 @@ def test_reference_check_objects_to_a_wrong_answer(run41):
 
 
 def test_beta_study_path_dependence_appears_with_coupling():
-    from shakedown.models.half_plane.studies import beta_study
+    from shakedown.studies.half_plane import beta_study
 
     tab = beta_study([0.0, 0.1], n_nodes=21, n_paths=3, steps_per_cycle=100)
     b0, b1 = tab.iloc[0], tab.iloc[1]
@@ -148,7 +148,7 @@ def test_beta_study_path_dependence_appears_with_coupling():
 
 
 def test_bounds_do_not_depend_on_units():
-    from shakedown.models.half_plane.studies import contact_subsystem
+    from shakedown.studies.half_plane import contact_subsystem
 
     lams = []
     for e, force, length in ((1.0, 1.0, 1.0), (1e9, 1e6, 1e-3)):

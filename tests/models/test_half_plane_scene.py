@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import shakedown as sd
-from shakedown.models.half_plane.scene import HERTZ_ELLIPSE, build_from_scene
+from shakedown.scenes.builders.half_plane import HERTZ_ELLIPSE, build_from_scene
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -36,12 +36,20 @@ def test_bad_scene_tables_name_the_key(model, load, match):
         build_from_scene(model, load, None)
 
 
-def test_scene_runs_through_the_registry_when_wired():
+def test_builtin_scene_runs_through_the_registry():
     from shakedown import scenes
 
-    kinds = getattr(scenes, "MODEL_KINDS", {})
-    if "half_plane" not in kinds:
-        pytest.skip("scene kind 'half_plane' is not registered in shakedown.scenes yet")
-    scene = scenes.load_scene(HERTZ_ELLIPSE)
+    assert scenes.MODEL_KINDS["half_plane"] == "shakedown.scenes.builders.half_plane"
+    assert "hertz_ellipse" in scenes.builtin_scenes()
+    scene = scenes.load_scene("hertz_ellipse")
     system, load, model = scenes.build(scene)
-    assert system.n_nodes == 60
+    assert system.n_nodes == 60 and model.reference == 30
+
+
+def test_bad_scene_through_the_registry_names_file_and_key():
+    from shakedown import scenes
+
+    text = HERTZ_ELLIPSE.read_text().replace("radius = 1.0", "radius = -1.0")
+    scene = scenes.scene_from_string(text)
+    with pytest.raises(sd.SceneError, match="radius"):
+        scenes.build(scene)

@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import numpy as np
 
-import shakedown as sd
+from ...model import InputError
 
 
 def hertz_half_width(P, radius, e_star):
@@ -68,7 +68,7 @@ def contact_half_width(P, gap_function, e_star, a_max):
     """Half-width ``a`` with ``contact_load(a) = P`` (bisection on ``(0, a_max]``)."""
     lo, hi = 0.0, float(a_max)
     if contact_load(hi, gap_function, e_star) < P:
-        raise sd.InputError(f"the contact for P = {P:g} is wider than a_max = {a_max:g}")
+        raise InputError(f"the contact for P = {P:g} is wider than a_max = {a_max:g}")
     for _ in range(80):
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if contact_load(mid, gap_function, e_star) < P else (lo, mid)
@@ -79,7 +79,7 @@ def cattaneo_mindlin_ratio(Q, P, friction):
     """Stick-zone ratio ``c/a = sqrt(1 - |Q|/(f P))`` (Hertz, monotonic ``Q`` at constant ``P``)."""
     r = 1.0 - np.abs(Q) / (friction * P)
     if np.any(r < 0):
-        raise sd.InputError(f"|Q| must be <= f P for partial slip; got Q = {Q}, f P = {friction * P}")
+        raise InputError(f"|Q| must be <= f P for partial slip; got Q = {Q}, f P = {friction * P}")
     return np.sqrt(r)
 
 
@@ -161,7 +161,7 @@ def shell_history(P, Q, friction):
     Q = np.asarray(Q, float)
     f = float(friction)
     if np.any(P <= 0) or np.any(np.abs(Q) >= f * P):
-        raise sd.InputError("the path must keep P > 0 and |Q| < f P (no gross slip)")
+        raise InputError("the path must keep P > 0 and |Q| < f P (no gross slip)")
     sh = _Shells()
     sh.e = np.array([0.0, P[0]])
     sh.r = np.array([Q[0] / P[0]])
@@ -235,7 +235,7 @@ def profile_cycle(P0, P1, Q1, phase, friction, e_star, gap_function, a_max, *, l
     """:func:`hertz_cycle` for any symmetric convex gap ``g(x)`` (contacts up to ``a_max``)."""
     table = profile_shift_table(gap_function, e_star, a_max)
     if table[0][-1] < P0 + abs(lam * P1):
-        raise sd.InputError(f"a_max = {a_max:g} is too small for P = {P0 + abs(lam * P1):g}")
+        raise InputError(f"a_max = {a_max:g} is too small for P = {P0 + abs(lam * P1):g}")
     return hertz_cycle(P0, P1, Q1, phase, friction, e_star, lam=lam, steps=steps, cycles=cycles,
                        _table=table)
 

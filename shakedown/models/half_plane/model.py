@@ -32,8 +32,8 @@ and :meth:`HalfPlaneModel.check_reference` verifies ``p_m > 0`` and ``|q_m| <= f
 For ``beta = 0``, ``|Q| < f P`` and a symmetric convex profile the Cattaneo-Mindlin /
 Ciavarella-Jager stick zone is always a central interval, so the centre cell never slips;
 for ``beta != 0`` the check is what guarantees exactness, and ``reference_x`` (or
-:func:`.studies.choose_reference`, which moves the reference to the cell with the largest stick
-margin) keeps it satisfied up to ``beta ~ 0.2`` at ``f = 0.5`` in our runs.  Why not a soft
+:func:`shakedown.studies.half_plane.choose_reference`, which moves the reference to the cell
+with the largest stick margin) keeps it satisfied up to ``beta ~ 0.1-0.2`` at ``f = 0.5``.  Why not a soft
 spring: under force control the only stiffness against a rigid tangential shift is friction
 itself, so any spring changes the resultant ``sum q = Q`` by ``k s``; the reference cell changes
 nothing while it sticks.
@@ -45,8 +45,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-import shakedown as sd
-
+from ...model import DiscreteSystem, InputError, LoadCycle
 from .influence import compliance
 
 _GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(4)
@@ -57,9 +56,9 @@ def _positive(name, value):
     try:
         v = float(value)
     except (TypeError, ValueError):
-        raise sd.InputError(f"{name} must be a number > 0, got {value!r}") from None
+        raise InputError(f"{name} must be a number > 0, got {value!r}") from None
     if not np.isfinite(v) or v <= 0:
-        raise sd.InputError(f"{name} must be > 0, got {value!r}")
+        raise InputError(f"{name} must be > 0, got {value!r}")
     return v
 
 
@@ -68,9 +67,9 @@ def _modulus(name, value):
     try:
         v = float(value)
     except (TypeError, ValueError):
-        raise sd.InputError(f"{name} must be a number > 0 (inf: rigid), got {value!r}") from None
+        raise InputError(f"{name} must be a number > 0 (inf: rigid), got {value!r}") from None
     if np.isnan(v) or v <= 0:
-        raise sd.InputError(f"{name} must be > 0 (inf: rigid), got {value!r}")
+        raise InputError(f"{name} must be > 0 (inf: rigid), got {value!r}")
     return v
 
 
@@ -82,7 +81,7 @@ def rigid_indenter_materials(beta: float, youngs_modulus: float = 1.0):
     """
     b = float(beta)
     if not 0.0 <= b < 0.5:
-        raise sd.InputError(f"beta must be in [0, 0.5) for a rigid body 2, got {beta!r}")
+        raise InputError(f"beta must be in [0, 0.5) for a rigid body 2, got {beta!r}")
     return ((float(youngs_modulus), (1 - 2 * b) / (2 * (1 - b))), (np.inf, 0.0))
 
 
@@ -90,15 +89,15 @@ def _materials(materials):
     try:
         (E1, nu1), (E2, nu2) = materials
     except (TypeError, ValueError):
-        raise sd.InputError(
+        raise InputError(
             f"materials must be ((E1, nu1), (E2, nu2)), got {materials!r}") from None
     E1 = _modulus("materials[0] Young's modulus E1", E1)
     E2 = _modulus("materials[1] Young's modulus E2", E2)
     if np.isinf(E1) and np.isinf(E2):
-        raise sd.InputError("materials: at most one body may be rigid (E = inf)")
+        raise InputError("materials: at most one body may be rigid (E = inf)")
     for name, nu in (("materials[0] Poisson ratio nu1", nu1), ("materials[1] Poisson ratio nu2", nu2)):
         if not (isinstance(nu, (int, float, np.floating)) and -1.0 < nu <= 0.5):
-            raise sd.InputError(f"{name} must be in (-1, 0.5], got {nu!r}")
+            raise InputError(f"{name} must be in (-1, 0.5], got {nu!r}")
     inv = (1 - nu1**2) / E1 + (1 - nu2**2) / E2
     k1 = (1 - 2 * nu1) * (1 + nu1) / (2 * E1)
     k2 = (1 - 2 * nu2) * (1 + nu2) / (2 * E2)
@@ -114,17 +113,17 @@ def profile_function(profile: str, *, radius=None, flat_half_width=None, exponen
     ``= x^2/2R`` for ``n = 2``); ``"samples"``: ``gap_samples = (x, g)`` interpolated linearly.
     """
     if profile not in PROFILES:
-        raise sd.InputError(f"profile must be one of {PROFILES}, got {profile!r}")
+        raise InputError(f"profile must be one of {PROFILES}, got {profile!r}")
     if profile == "samples":
         try:
             xs, gs = (np.asarray(a, float) for a in gap_samples)
         except (TypeError, ValueError):
-            raise sd.InputError(
+            raise InputError(
                 f"gap_samples must be (x, g), two 1-D arrays, got {gap_samples!r}") from None
         if xs.ndim != 1 or xs.shape != gs.shape or xs.size < 2 or np.any(np.diff(xs) <= 0):
-            raise sd.InputError("gap_samples must be (x, g) with x strictly increasing, same length >= 2")
+            raise InputError("gap_samples must be (x, g) with x strictly increasing, same length >= 2")
         if not (np.all(np.isfinite(gs)) and np.all(np.isfinite(xs))):
-            raise sd.InputError("gap_samples must be finite")
+            raise InputError("gap_samples must be finite")
         return lambda x: np.interp(x, xs, gs)
     R = _positive("radius", radius)
     if profile == "hertz":
@@ -134,7 +133,7 @@ def profile_function(profile: str, *, radius=None, flat_half_width=None, exponen
         return lambda x: np.maximum(np.abs(x) - b, 0.0) ** 2 / (2 * R)
     n = _positive("exponent", exponent)
     if n < 1:
-        raise sd.InputError(f"exponent must be >= 1 (a convex profile), got {exponent!r}")
+        raise InputError(f"exponent must be >= 1 (a convex profile), got {exponent!r}")
     return lambda x: np.abs(x) ** n / (n * R ** (n - 1))
 
 
@@ -159,7 +158,7 @@ class HalfPlaneModel:
     profile, radius : str, float or None
     """
 
-    system: sd.DiscreteSystem
+    system: DiscreteSystem
     x: np.ndarray
     x_cells: np.ndarray
     reference: int
@@ -189,7 +188,7 @@ class HalfPlaneModel:
         n = self.system.n_nodes
         return r[..., :n], r[..., n:]
 
-    def load_cycle(self, P0, P1=0.0, Q1=0.0, phase=0.0) -> sd.LoadCycle:
+    def load_cycle(self, P0, P1=0.0, Q1=0.0, phase=0.0) -> LoadCycle:
         """``P(t) = P0 + lam P1 cos(2 pi t + phase)``, ``Q(t) = lam Q1 cos(2 pi t)``.
 
         Parameters
@@ -207,31 +206,31 @@ class HalfPlaneModel:
             try:
                 vals[name] = float(v)
             except (TypeError, ValueError):
-                raise sd.InputError(f"{name} must be a number, got {v!r}") from None
+                raise InputError(f"{name} must be a number, got {v!r}") from None
             if not np.isfinite(vals[name]):
-                raise sd.InputError(f"{name} must be finite, got {v!r}")
+                raise InputError(f"{name} must be finite, got {v!r}")
         P1, Q1, ph = vals["P1"], vals["Q1"], vals["phase"]
         q0, p0 = self.welded(0.0, P0)
         uq, up = self.welded(1.0, 0.0)
         uq, up = uq - self.welded(0.0, 0.0)[0], up - self.welded(0.0, 0.0)[1]
         vq, vp = self.welded(0.0, 1.0)
         vq, vp = vq - self.welded(0.0, 0.0)[0], vp - self.welded(0.0, 0.0)[1]
-        return sd.LoadCycle.from_harmonics(
+        return LoadCycle.from_harmonics(
             q0, p0,
             q_cos=Q1 * uq + P1 * np.cos(ph) * vq, q_sin=-P1 * np.sin(ph) * vq,
             p_cos=Q1 * up + P1 * np.cos(ph) * vp, p_sin=-P1 * np.sin(ph) * vp)
 
-    def load_from_samples(self, P0, P1_samples, Q1_samples) -> sd.LoadCycle:
+    def load_from_samples(self, P0, P1_samples, Q1_samples) -> LoadCycle:
         """``P = P0 + lam P1(t)``, ``Q = lam Q1(t)`` from samples at ``t = k / S`` (linear between)."""
         P0 = _positive("P0", P0)
         P1 = np.asarray(P1_samples, float)
         Q1 = np.asarray(Q1_samples, float)
         if P1.ndim != 1 or P1.shape != Q1.shape or P1.size < 2:
-            raise sd.InputError("P1_samples and Q1_samples must be 1-D, same length >= 2")
+            raise InputError("P1_samples and Q1_samples must be 1-D, same length >= 2")
         q0, p0 = self.welded(0.0, P0)
         qa, pa = self.welded(Q1, P1)
         qz, pz = self.welded(0.0, 0.0)
-        return sd.LoadCycle.from_samples(q0, p0, qa - qz, pa - pz)
+        return LoadCycle.from_samples(q0, p0, qa - qz, pa - pz)
 
     def reference_reactions(self, q, p, Q, P):
         """Reactions of the reference cell, ``(Q - sum q, P - sum p)`` (shapes (..., N-1) -> (...))."""
@@ -296,28 +295,28 @@ def half_plane_model(profile: str = "hertz", *, radius=None, n_nodes: int = 101,
                             exponent=exponent, gap_samples=gap_samples)
     if isinstance(n_nodes, bool) or not isinstance(n_nodes, (int, np.integer)) or n_nodes < 3 \
             or n_nodes % 2 == 0:
-        raise sd.InputError(f"n_nodes must be an odd integer >= 3, got {n_nodes!r}")
+        raise InputError(f"n_nodes must be an odd integer >= 3, got {n_nodes!r}")
     width = _positive("width", width)
     try:
         f = float(friction)
     except (TypeError, ValueError):
-        raise sd.InputError(f"friction must be a number >= 0, got {friction!r}") from None
+        raise InputError(f"friction must be a number >= 0, got {friction!r}") from None
     if not np.isfinite(f) or f < 0:
-        raise sd.InputError(f"friction must be >= 0, got {friction!r}")
+        raise InputError(f"friction must be >= 0, got {friction!r}")
     e_star, beta = _materials(materials)
     N = int(n_nodes)
     h = width / N
     xc = -width / 2 + h * (np.arange(N) + 0.5)
     gap = 0.5 * (gfun(xc[:, None] + 0.5 * h * _GAUSS_X[None, :]) @ _GAUSS_W)  # cell means
     if not np.all(np.isfinite(gap)):
-        raise sd.InputError("the gap profile must be finite on the window")
+        raise InputError("the gap profile must be finite on the window")
     best = np.flatnonzero(gap <= gap.min() + 1e-12 * max(abs(gap).max(), 1e-300))
     m = int(best[np.argmin(np.abs(xc[best]))])
     if reference_x is not None:
         try:
             m = int(np.argmin(np.abs(xc - float(reference_x))))
         except (TypeError, ValueError):
-            raise sd.InputError(f"reference_x must be a number, got {reference_x!r}") from None
+            raise InputError(f"reference_x must be a number, got {reference_x!r}") from None
     F = compliance(N, h, e_star, beta)
     keep = np.delete(np.arange(N), m)
     T1 = np.zeros((N, N - 1))
@@ -334,7 +333,7 @@ def half_plane_model(profile: str = "hertz", *, radius=None, n_nodes: int = 101,
     em[m, 0] = em[N + m, 1] = 1.0
     r_gap = -K @ (T.T @ gt)
     r_unit = -K @ (T.T @ (F @ em))
-    system = sd.DiscreteSystem(K[:n, :n], K[:n, n:], K[n:, n:], f)
+    system = DiscreteSystem(K[:n, :n], K[:n, n:], K[n:, n:], f)
     return HalfPlaneModel(system=system, x=xc[keep], x_cells=xc, reference=m, h=h,
                           e_star=e_star, beta=beta, gap=gap, profile=profile,
                           radius=None if radius is None else float(radius), gap_function=gfun,

@@ -10,7 +10,7 @@
     ``P0`` (> 0), ``P1``, ``Q1`` [force per unit thickness], ``phase`` [rad] or ``phase_deg``:
     ``P(t) = P0 + lam P1 cos(2 pi t + phase)``, ``Q(t) = lam Q1 cos(2 pi t)``.
 
-The third returned object is the :class:`~.model.HalfPlaneModel`.
+The third returned object is the :class:`shakedown.models.half_plane.HalfPlaneModel`.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-import shakedown as sd
+from ...model.errors import SceneError
 
 MODEL_KEYS = {
     "profile": (str,), "radius": (int, float), "flat_half_width": (int, float),
@@ -31,17 +31,17 @@ LOAD_KEYS = {"P0": (int, float), "P1": (int, float), "Q1": (int, float),
              "phase": (int, float), "phase_deg": (int, float)}
 
 #: The built-in scene of seed 002 s.4.2 (Figs. 12-13).
-HERTZ_ELLIPSE = Path(__file__).with_name("hertz_ellipse.toml")
+HERTZ_ELLIPSE = Path(__file__).resolve().parents[1] / "builtin" / "hertz_ellipse.toml"
 
 
 def _check(table: dict, allowed: dict, name: str):
     for key, value in table.items():
         if key not in allowed:
-            raise sd.SceneError(f"[{name}] key {key!r} is not allowed for kind 'half_plane'; "
+            raise SceneError(f"[{name}] key {key!r} is not allowed for kind 'half_plane'; "
                                 f"allowed: {', '.join(allowed)}")
         if isinstance(value, bool) or not isinstance(value, allowed[key]):
             want = " or ".join("list" if t is list else t.__name__ for t in allowed[key])
-            raise sd.SceneError(f"[{name}] key {key!r} = {value!r} must be a {want}")
+            raise SceneError(f"[{name}] key {key!r} = {value!r} must be a {want}")
 
 
 def build_from_scene(model_table: dict, load_table: dict, base_dir=None):
@@ -49,16 +49,16 @@ def build_from_scene(model_table: dict, load_table: dict, base_dir=None):
 
     ``base_dir`` is accepted for the builder interface (no file is read).
     """
-    from .continuum import hertz_half_width
-    from .model import _materials, half_plane_model
+    from ...models.half_plane.continuum import hertz_half_width
+    from ...models.half_plane.model import _materials, _positive, half_plane_model
 
     model_table = {k: v for k, v in model_table.items() if k != "kind"}
     _check(model_table, MODEL_KEYS, "model")
     _check(load_table, LOAD_KEYS, "load")
     if "phase" in load_table and "phase_deg" in load_table:
-        raise sd.SceneError("[load] give 'phase' (radians) or 'phase_deg', not both")
+        raise SceneError("[load] give 'phase' (radians) or 'phase_deg', not both")
     if "P0" not in load_table:
-        raise sd.SceneError("[load] key 'P0' (mean normal load > 0) is required")
+        raise SceneError("[load] key 'P0' (mean normal load > 0) is required")
     P0 = float(load_table["P0"])
     P1 = float(load_table.get("P1", 0.0))
     Q1 = float(load_table.get("Q1", 0.0))
@@ -72,13 +72,14 @@ def build_from_scene(model_table: dict, load_table: dict, base_dir=None):
             kw[key] = float(model_table[key])
     if profile == "samples":
         if "gap_x" not in model_table or "gap_g" not in model_table:
-            raise sd.SceneError("[model] profile 'samples' needs the lists 'gap_x' and 'gap_g'")
+            raise SceneError("[model] profile 'samples' needs the lists 'gap_x' and 'gap_g'")
         kw["gap_samples"] = (model_table["gap_x"], model_table["gap_g"])
     width = model_table.get("width")
     if width is None:
         if profile != "hertz" or "radius" not in kw:
-            raise sd.SceneError("[model] key 'width' is required unless profile = 'hertz' "
+            raise SceneError("[model] key 'width' is required unless profile = 'hertz' "
                                 "with a 'radius' (then it defaults to 2.4 a(P0 + |P1|))")
+        _positive("radius", kw["radius"])
         e_star, _ = _materials(mats)
         width = 2.4 * float(hertz_half_width(P0 + abs(P1), kw["radius"], e_star))
     m = half_plane_model(profile, n_nodes=model_table.get("n_nodes", 61), width=width,

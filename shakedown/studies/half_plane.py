@@ -15,9 +15,10 @@ from __future__ import annotations
 
 import numpy as np
 
-import shakedown as sd
-
-from .model import half_plane_model, rigid_indenter_materials
+from ..bounds import shakedown_bounds
+from ..evolution import solve_cycles, solve_step
+from ..model import DiscreteSystem, LoadCycle, SolverError
+from ..models.half_plane.model import half_plane_model, rigid_indenter_materials
 
 
 def oa_state(model, P_path, Q_path, substeps: int = 10):
@@ -34,9 +35,9 @@ def oa_state(model, P_path, Q_path, substeps: int = 10):
     for k in range(1, P.size):
         for a in np.arange(1, substeps + 1) / substeps:
             qw, pw = model.welded(Q[k - 1] + a * (Q[k] - Q[k - 1]), P[k - 1] + a * (P[k] - P[k - 1]))
-            res = sd.solve_step(s, v, qw, pw, guess=None if res is None else res.active_set)
+            res = solve_step(s, v, qw, pw, guess=None if res is None else res.active_set)
             if not res.success:
-                raise sd.SolverError(f"OA path: step failed ({res.message})", partial=res)
+                raise SolverError(f"OA path: step failed ({res.message})", partial=res)
             v = res.slip
     return v, res.gap
 
@@ -88,7 +89,7 @@ def choose_reference(model_factory, load_factory, P_of_t, Q_of_t, *, steps_per_c
     """
     m = model_factory(None)
     for _ in range(int(iterations)):
-        run = sd.solve_cycles(m.system, load_factory(m), 1.0, steps_per_cycle=steps_per_cycle,
+        run = solve_cycles(m.system, load_factory(m), 1.0, steps_per_cycle=steps_per_cycle,
                               max_cycles=max_cycles)
         if not run.success:
             return m
@@ -105,7 +106,7 @@ def oa_runs(model, load, paths, *, lam=1.0, steps_per_cycle=100, max_cycles=150)
     runs = []
     for Pp, Qp in paths:
         v, w = oa_state(model, Pp, Qp)
-        runs.append(sd.solve_cycles(model.system, load, lam, initial_slip=v, initial_gap=w,
+        runs.append(solve_cycles(model.system, load, lam, initial_slip=v, initial_gap=w,
                                     steps_per_cycle=steps_per_cycle, max_cycles=max_cycles))
     return runs
 
@@ -151,7 +152,7 @@ def contact_subsystem(model, load, P_static: float, Q_static: float = 0.0):
     """
     s = model.system
     qw, pw = model.welded(Q_static, P_static)
-    res = sd.solve_step(s, np.zeros(s.n_nodes), qw, pw)
+    res = solve_step(s, np.zeros(s.n_nodes), qw, pw)
     closed = np.flatnonzero(res.p > 1e-9 * np.max(np.abs(res.p)))  # round-off: open nodes ~1e-20
     n = s.n_nodes
     c = np.concatenate([closed, n + closed])
@@ -161,7 +162,7 @@ def contact_subsystem(model, load, P_static: float, Q_static: float = 0.0):
     Kc = K[np.ix_(c, c)] - K[np.ix_(c, o)] @ X
     Kc = 0.5 * (Kc + Kc.T)
     m = closed.size
-    sub = sd.DiscreteSystem(Kc[:m, :m], Kc[:m, m:], Kc[m:, m:], s.friction[closed])
+    sub = DiscreteSystem(Kc[:m, :m], Kc[:m, m:], Kc[m:, m:], s.friction[closed])
 
     def cond(q, p):
         r = np.concatenate([q, p], axis=-1)
@@ -170,7 +171,7 @@ def contact_subsystem(model, load, P_static: float, Q_static: float = 0.0):
 
     q0, p0 = cond(load.q0, load.p0)
     parts = {k: cond(getattr(load, f"q_{k}"), getattr(load, f"p_{k}")) for k in ("cos", "sin")}
-    sub_load = sd.LoadCycle.from_harmonics(q0, p0, q_cos=parts["cos"][0], p_cos=parts["cos"][1],
+    sub_load = LoadCycle.from_harmonics(q0, p0, q_cos=parts["cos"][0], p_cos=parts["cos"][1],
                                            q_sin=parts["sin"][0], p_sin=parts["sin"][1])
     return sub, sub_load, closed
 
@@ -193,7 +194,7 @@ def beta_study(betas, *, n_nodes=31, friction=0.5, P0=1e-3, P1=0.3e-3, Q1=0.3e-3
     """
     import pandas as pd
 
-    from .continuum import hertz_half_width
+    from ..models.half_plane.continuum import hertz_half_width
 
     rows = []
     for beta in betas:
@@ -228,7 +229,7 @@ def beta_study(betas, *, n_nodes=31, friction=0.5, P0=1e-3, P1=0.3e-3, Q1=0.3e-3
             worst.append(chk[1])
         cmp = compare_runs(runs)
         sub, sub_load, _ = contact_subsystem(m, m.load_cycle(P0=P0, Q1=bounds_Q1 or Q1), P0)
-        b = sd.shakedown_bounds(sub, sub_load)
+        b = shakedown_bounds(sub, sub_load)
         Ws = cmp["W"]
         rows.append({
             "beta": float(beta), "W_min": Ws.min(), "W_max": Ws.max(),

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .continuum import ellipse_construction
+from ..models.half_plane.continuum import ellipse_construction
 
 
 def _ax(ax):
