@@ -107,3 +107,25 @@ def non_finite_message(force_scale: float, system) -> str:
     return (f"the result is not finite: forces of order F = {force_scale:.3g} over stiffnesses "
             f"of order {k:.3g} give energies ~F^2/k beyond the floating-point range; lower the "
             "load factor or express forces in larger units")
+
+
+def trust(run, system, exact_load, orbit, solver):
+    """``run`` with overflow made a failure and a shakedown within the load's sampling error
+    flagged (``within_sampling_error``, message).
+
+    ``exact_load`` is the load the user gave, ``orbit`` the steady orbit's records.
+    """
+    from dataclasses import replace
+
+    numbers = (run.dissipation, run.final_slip, run.final_gap, [run.force_scale])
+    if not all(np.all(np.isfinite(x)) for x in numbers) or (
+            run.period and not np.isfinite(run.steady_dissipation)):
+        return replace(run, status="non_finite", shook_down=False,
+                       message=non_finite_message(run.force_scale, system) + "; " + run.message)
+    if run.method == "events" and exact_load.kind == "samples":
+        return run  # the exact path of the given samples: nothing was sampled
+    chk = check_sampling(system, exact_load, run.lam, run.steps_per_cycle, run.final_slip,
+                         run.final_gap, run.shook_down, orbit, run.force_scale,
+                         solver.feas_tol * run.force_scale)
+    msg = run.message + ("; " + chk.message if chk.within else "")
+    return replace(run, sampling_error=chk.error, within_sampling_error=chk.within, message=msg)

@@ -240,7 +240,12 @@ class DiscreteSystem:
 
     # ------------------------------------------------------------------ critical friction
     def critical_friction(self, max_exact_nodes: int = EXACT_CRITICAL_FRICTION_MAX_NODES):
-        """Critical friction of the incremental problem (MODEL.md s.4).
+        """Critical friction of the incremental problem (MODEL.md s.4), computed once.
+
+        The answer depends only on the (frozen) system, so it is cached per
+        ``max_exact_nodes`` on the instance: every step solver, cycle run and study row of the
+        same system shares one computation (``with_friction`` returns a new system with its
+        own cache).
 
         The step LCP has a unique solution for every data iff, for every slip-direction sign
         matrix ``S = diag(s)``, ``s in {-1, 1}^N``, the matrix
@@ -261,6 +266,13 @@ class DiscreteSystem:
         CriticalFriction
         """
         citations.register("klarbring1990")
+        cache = self.__dict__.setdefault("_critical_cache", {})
+        key = int(max_exact_nodes)
+        if key not in cache:
+            cache[key] = self._critical_friction(key)
+        return cache[key]
+
+    def _critical_friction(self, max_exact_nodes: int):
         n = self.n_nodes
         f = self.friction
         fmax = float(f.max()) if n else 0.0
