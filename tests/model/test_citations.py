@@ -92,3 +92,12 @@ def test_fe_condensation_registers_scikit_fem():
     fe.FEModel(fe.rectangle(1.0, 1.0, 2, 2), fe.isotropic(1.0, 0.3), dirichlet=["top"],
                contact=["bottom"]).condense()
     assert "gustafsson2020" in citations.used()
+
+
+def test_half_plane_partial_slip_registers_its_papers():
+    from shakedown.models.half_plane.continuum import cattaneo_mindlin_ratio, shell_history
+
+    cattaneo_mindlin_ratio(0.5, 1.0, 1.0)
+    assert {"cattaneo1938", "mindlin1949"} <= set(citations.used())
+    shell_history(np.array([1.0, 1.0, 1.0]), np.array([0.0, 0.3, -0.2]), 0.5)
+    assert {"ciavarella1998", "jager1998"} <= set(citations.used())
