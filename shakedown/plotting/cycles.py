@@ -61,7 +61,16 @@ def _dissipation_array(run):
     return W
 
 
-def plot_dissipation(run, ax=None, *, log: bool = False, relative: bool = False, **line_kw):
+#: Placeholder units when a scene declares none (``[scene] force_unit``, ``length_unit``).
+UNITS = {"force": "[force]", "length": "[length]", "energy": "[force x length]"}
+
+
+def _unit(units, key):
+    return (units or {}).get(key, UNITS[key])
+
+
+def plot_dissipation(run, ax=None, *, log: bool = False, relative: bool = False, units=None,
+                     **line_kw):
     """Dissipation per cycle ``W_k`` against the cycle number ``k = 1, 2, ...``.
 
     Parameters
@@ -73,13 +82,20 @@ def plot_dissipation(run, ax=None, *, log: bool = False, relative: bool = False,
     relative : bool
         Plot ``|W_k - W_steady|`` instead (``W_steady`` from ``run.steady_dissipation``, else the
         last cycle): geometric convergence (seed 002 Fig. 8) is a straight line on a log axis.
+    units : dict, optional
+        ``{"energy": ...}`` unit of ``W`` for the axis label (default ``[force x length]``).
     **line_kw
         Passed to ``ax.plot``.
+
+    With at most three cycles the values are drawn as labelled bars (a lone dot says
+    nothing); cycle numbers are integers.
 
     Returns
     -------
     matplotlib Axes
     """
+    from matplotlib.ticker import MaxNLocator
+
     W = _dissipation_array(run)
     ax = _new_ax(ax)
     k = np.arange(1, W.size + 1)
@@ -96,11 +112,24 @@ def plot_dissipation(run, ax=None, *, log: bool = False, relative: bool = False,
         y = np.where(y > 0, y, np.nan)
     line_kw.setdefault("marker", "o")
     line_kw.setdefault("markersize", 3)
-    ax.plot(k, y, **line_kw)
+    if W.size <= 3 and not log:
+        bars = ax.bar(k, y, width=0.5, color=line_kw.get("color", "C0"))
+        ax.bar_label(bars, labels=[f"{v:.4g}" for v in y], fontsize=8)
+        ax.set_xlim(0.3, max(W.size, 1) + 0.7)
+        top = float(np.nanmax(np.abs(y))) if W.size and np.isfinite(y).any() else 0.0
+        ax.set_ylim(0, top * 1.25 if top > 0 else 1.0)
+        ax.set_xticks(k)
+        if top == 0 and W.size:
+            ax.plot(k, y, "o", color=line_kw.get("color", "C0"))
+            ax.text(0.5, 0.5, "W = 0 in every cycle: no node slips", ha="center",
+                    va="center", transform=ax.transAxes)
+    else:
+        ax.plot(k, y, **line_kw)
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     if log:
         ax.set_yscale("log")
     ax.set_xlabel("cycle")
-    ax.set_ylabel(label)
+    ax.set_ylabel(f"{label} {_unit(units, 'energy')}")
     return ax
 
 
@@ -119,7 +148,7 @@ def _steady_frame(run):
     return table
 
 
-def plot_steady_cycle(run, ax=None, *, nodes=None):
+def plot_steady_cycle(run, ax=None, *, nodes=None, units=None):
     """Slips (top) and reactions ``q`` (solid), ``p`` (dashed) (bottom) over the steady cycle.
 
     Parameters
@@ -128,7 +157,10 @@ def plot_steady_cycle(run, ax=None, *, nodes=None):
         Anything with a ``steady_table`` (columns ``t, node, slip, q, p``), or that table.
     ax : sequence of two Axes, optional
     nodes : sequence of int, optional
-        Nodes to draw (all by default; the first 10 when there are more than 10).
+        Nodes to draw (0-based, as in the table; all by default, the first 10 when there are
+        more than 10).  Legends number nodes from 1.
+    units : dict, optional
+        ``{"force": ..., "length": ...}`` for the axis labels.
 
     Returns
     -------
@@ -146,11 +178,12 @@ def plot_steady_cycle(run, ax=None, *, nodes=None):
     for i, j in enumerate(nodes):
         sub = tab[tab["node"] == j].sort_values("t")
         c = colours[i % len(colours)]
-        ax[0].plot(sub["t"], sub["slip"], color=c, label=f"node {j}")
-        ax[1].plot(sub["t"], sub["q"], color=c, label=f"q node {j}")
-        ax[1].plot(sub["t"], sub["p"], color=c, ls="--", label=f"p node {j}")
-    ax[0].set_ylabel("slip v")
-    ax[1].set_ylabel("reactions q (solid), p (dashed)")
+        ax[0].plot(sub["t"], sub["slip"], color=c, label=f"node {j + 1}")
+        ax[1].plot(sub["t"], sub["q"], color=c, label=f"q node {j + 1}")
+        ax[1].plot(sub["t"], sub["p"], color=c, ls="--", label=f"p node {j + 1}")
+    ax[0].set_ylabel(f"slip v {_unit(units, 'length')}")
+    ax[1].set_ylabel(f"q (solid), p (dashed) {_unit(units, 'force')}")
+    ax[0].set_title("steady cycle", fontsize=10)
     ax[1].set_xlabel("t [cycles]")
     ax[0].legend(fontsize="small")
     return ax
@@ -180,6 +213,7 @@ def plot_node_states(run, ax=None):
         index="node", columns="t", values="code", aggfunc="first"
     )
     t = grid.columns.to_numpy(float)
+    grid.index = grid.index.astype(int) + 1  # nodes numbered from 1
     ax = _new_ax(ax)
     cmap = ListedColormap([_STATE_COLOURS.get(s, "#9467bd") for s in labels])
     dt = np.diff(t).min() if t.size > 1 else 1.0
@@ -187,10 +221,11 @@ def plot_node_states(run, ax=None):
     ax.imshow(grid.to_numpy(float), aspect="auto", interpolation="nearest", cmap=cmap,
               vmin=-0.5, vmax=len(labels) - 0.5, extent=extent)
     ax.legend(handles=[Patch(color=cmap(i), label=s) for i, s in enumerate(labels)],
-              fontsize="small", loc="upper right")
+              fontsize="small", loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
     ax.set_yticks(grid.index.to_numpy(int) if len(grid.index) <= 20 else ax.get_yticks())
     ax.set_xlabel("t [cycles]")
     ax.set_ylabel("node")
+    ax.set_title("node states over the steady cycle", fontsize=10)
     return ax
 
 
@@ -237,7 +272,8 @@ def _trajectory_arrays(trajectories):
 
 
 def plot_trajectory(system, load, lam: float, trajectories=None, ax=None, *, space: str = "v",
-                    times=(), extremes: bool = True, shade_safe: bool = True, labels=None):
+                    times=(), extremes: bool = True, shade_safe: bool = True, labels=None,
+                    units=None):
     """Two-node state trajectories over the moving constraint lines (seed 002 Figs. 2-8).
 
     The constraint lines are ``G_k . v = b_k`` with ``G = [A - F B^T; -(A + F B^T)]`` (MODEL.md
@@ -260,11 +296,13 @@ def plot_trajectory(system, load, lam: float, trajectories=None, ax=None, *, spa
         Also draw the instantaneous constraint lines at these times (cycles), thin solid.
     extremes : bool
         Draw the extreme positions of the 4 constraints, dashed (``I^E, II^E, III^E, IV^E``
-        of the seed are ``I_0, II_0, I_1, II_1`` here).
+        of the seed are ``I_1, II_1, I_2, II_2`` here, nodes numbered from 1).
     shade_safe : bool
         Shade the safe shakedown region ``H(lam)`` when it is a bounded non-empty polygon.
     labels : sequence of str, optional
         Legend labels of the trajectories.
+    units : dict, optional
+        ``{"force": ..., "length": ...}`` for the axis labels.
 
     Returns
     -------
@@ -316,7 +354,7 @@ def plot_trajectory(system, load, lam: float, trajectories=None, ax=None, *, spa
         P = poly @ T.T
         ax.fill(P[:, 0], P[:, 1], color="0.85", zorder=0, label="safe region H")
     # seed 002 numbering: I, II for node 0 (rows 0, 2), III, IV for node 1 (rows 1, 3)
-    names = ["I (I_0)", "III (I_1)", "II (II_0)", "IV (II_1)"]
+    names = ["I (I_1)", "III (I_2)", "II (II_1)", "IV (II_2)"]
     styles = ["C3", "C0", "C1", "C2"]
     for k in range(4):
         offs = ([b_ext[k]] if extremes else []) + [b[k] for b in b_inst]
@@ -327,9 +365,12 @@ def plot_trajectory(system, load, lam: float, trajectories=None, ax=None, *, spa
                     label=f"{names[k]} extreme" if dashed else None)
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
-    x, y = ("v", "v") if space == "v" else ("tau", "tau")
-    ax.set_xlabel(f"{x}_0")
-    ax.set_ylabel(f"{y}_1")
+    if space == "v":
+        ax.set_xlabel(f"$v_1$, slip of node 1 {_unit(units, 'length')}")
+        ax.set_ylabel(f"$v_2$, slip of node 2 {_unit(units, 'length')}")
+    else:
+        ax.set_xlabel(rf"$\tau_1 = (A v)_1$ {_unit(units, 'force')}")
+        ax.set_ylabel(rf"$\tau_2 = (A v)_2$ {_unit(units, 'force')}")
     ax.legend(fontsize="small")
     return ax
 
@@ -342,7 +383,7 @@ def _axline(ax, g, b, **kw):
     return ax.axline(tuple(p0), tuple(p0 + d), **kw)
 
 
-def plot_uniqueness(study, ax=None):
+def plot_uniqueness(study, ax=None, *, units=None):
     """Steady ``W`` of every initial state of a :class:`~shakedown.steady.UniquenessStudy`.
 
     Runs that shook down are drawn as open circles, runs in cyclic slip as dots, runs that did
@@ -360,7 +401,11 @@ def plot_uniqueness(study, ax=None):
     ax.plot(i[ok & ~sd_], W[ok & ~sd_], ".", ms=8, label="cyclic slip")
     if (~ok).any():
         ax.plot(i[~ok], np.zeros((~ok).sum()), "x", label="no steady cycle")
-    ax.set_xlabel("initial state")
-    ax.set_ylabel("steady W per cycle")
+    from matplotlib.ticker import MaxNLocator
+
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    ax.set_xlabel("initial state (0: zero slip)")
+    ax.set_ylabel(f"steady W per cycle {_unit(units, 'energy')}")
+    ax.set_title("steady dissipation from each initial state", fontsize=10)
     ax.legend(fontsize="small")
     return ax

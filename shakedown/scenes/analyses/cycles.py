@@ -296,14 +296,16 @@ def _plots(ctx, run, study, lam, options):
         plot_uniqueness,
     )
 
+    units = _units(ctx)
     fig, ax = plt.subplots(figsize=(6, 4))
-    plot_dissipation(run, ax, log=options["log_scale"])
-    ax.set_title(f"dissipation per cycle, lam = {lam:g}")
+    plot_dissipation(run, ax, log=options["log_scale"], units=units)
+    ax.set_title(f"dissipation per cycle at lam = {lam:.4g}", fontsize=10)
     ctx.output.save_figure("dissipation.png", fig)
     has_steady = run.steady_table is not None and len(run.steady_table) > 0
     if has_steady:
         fig, axs = plt.subplots(2, 1, sharex=True, figsize=(6.4, 5.6))
-        plot_steady_cycle(run, axs)
+        plot_steady_cycle(run, axs, units=units)
+        axs[0].set_title(f"steady cycle at lam = {lam:.4g}", fontsize=10)
         ctx.output.save_figure("steady_cycle.png", fig)
         fig, ax = plt.subplots(figsize=(6.4, 3.5))
         plot_node_states(run, ax)
@@ -313,9 +315,10 @@ def _plots(ctx, run, study, lam, options):
     if ctx.system.n_nodes == 2:
         for space, name in (("v", "trajectory.png"), ("tau", "trajectory_tau.png")):
             fig, ax = plt.subplots(figsize=(5.5, 5))
-            plot_trajectory(ctx.system, ctx.load, lam, run, ax, space=space)
+            plot_trajectory(ctx.system, ctx.load, lam, run, ax, space=space, units=units)
+            ax.set_title(f"trajectory at lam = {lam:.4g}", fontsize=10)
             ctx.output.save_figure(name, fig)
     if study is not None:
         fig, ax = plt.subplots(figsize=(6, 4))
-        plot_uniqueness(study, ax)
+        plot_uniqueness(study, ax, units=units)
         ctx.output.save_figure("uniqueness.png", fig)
