@@ -261,7 +261,8 @@ def cycles_verdict(run, lam: float, energy: str = "[force x length]", study=None
     elif run.status == "not_converged":
         W = np.asarray(run.dissipation, float)
         last = f" (last cycle: W = {W[-1]:.4g} {energy})" if W.size else ""
-        text = (f"{at}, it did not reach a steady state in {int(run.n_cycles)} cycles{last}; "
+        n = int(run.n_cycles)
+        text = (f"{at}, it did not reach a steady state in {n} cycle{'s' * (n != 1)}{last}; "
                 "raise max_cycles to go on.")
     else:
         text = f"{at}, the run stopped before a steady state: {run.message}"
