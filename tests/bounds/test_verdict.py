@@ -7,7 +7,7 @@ system of seed 002 Fig. 4 (README); the 3-node system of the gallery with ``lam_
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 import shakedown as sd
@@ -85,15 +85,21 @@ def test_lam_adj_inf_is_explained_only_when_it_was_computed():
 
 
 @settings(max_examples=20, deadline=None)
-@given(exponent=st.floats(-6.0, 12.0), case=st.sampled_from(["coupled", "tensile", "three"]))
+@given(exponent=st.floats(-6.0, 12.0),
+       case=st.sampled_from(["coupled", "tensile", "slightly_tensile", "three"]))
+@example(exponent=-6.0, case="slightly_tensile").via("the smallest units: tension of 1e-13")
+@example(exponent=12.0, case="three").via("the largest units")
 def test_verdict_does_not_depend_on_units(exponent, case):
     """Forces and stiffness in other units (the same factor on both: slips unchanged)."""
     if case == "three":
         p = sd.gallery.get("three_node_below_lam1")
         s, load = p.system, p.load
     else:
-        s, load = coupled(friction=0.5, p0=[-1.0, 1.0]) if case == "tensile" else coupled()
+        # "slightly": p0 = -1e-7 of the load is still tension, in any units
+        p0 = {"tensile": [-1.0, 1.0], "slightly_tensile": [-1e-7, 1.0]}.get(case, [1.0, 1.0])
+        s, load = coupled(friction=0.5, p0=p0)
     k = 1.37 * 10.0 ** exponent
     scaled = sd.DiscreteSystem(k * s.A, k * s.B, k * s.C, s.friction)
     ref = bounds_verdict(sd.shakedown_bounds(s, load), adjacency=True)
+    assert ("tensile" in ref) == (case in ("tensile", "slightly_tensile"))
     assert bounds_verdict(sd.shakedown_bounds(scaled, load.scaled(k)), adjacency=True) == ref

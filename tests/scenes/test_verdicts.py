@@ -79,6 +79,17 @@ def test_above_lam2_cyclic_slip_with_w_in_the_scene_units(tmp_path, bounds):
     assert f"node{'s' * (len(slipping) > 1)} {names} slip" in v
 
 
+def test_a_stuck_node_is_not_listed_as_slipping(tmp_path):
+    """Seed 002 Fig. 5 (gallery): node 2 stays stuck while node 1 slips every cycle."""
+    from shakedown.scenes.analyses.cycles import cycles_verdict
+
+    p = sd.gallery.get("fig5_uncoupled_stuck")
+    run = sd.solve_cycles(p.system, p.load, p.lam, steps_per_cycle=64, max_cycles=100)
+    assert list(run.stuck_nodes) == [1]
+    v = cycles_verdict(run, p.lam)
+    assert v.endswith("period 1, node 1 slip."), v
+
+
 def test_without_units_w_is_force_times_length(tmp_path, bounds):
     res, _ = _run(SCENE, tmp_path, "cycles", lam=1.5 * bounds.lam2, plots="false")
     assert "[force x length] per cycle" in res["verdict"]
