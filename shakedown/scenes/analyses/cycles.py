@@ -73,6 +73,7 @@ def _check(options, n):
 def run(ctx, options: dict) -> dict:
     from ...evolution import steady_cycle, uniqueness_study
     from ...evolution.cycles import solve_cycles
+    from ...model.progress import described
 
     system, load = ctx.system, ctx.load
     n = system.n_nodes
@@ -89,7 +90,8 @@ def run(ctx, options: dict) -> dict:
             system, load, lam, states, rng=options["seed"], n_jobs=options["n_jobs"] or None,
             max_cycles=options["max_cycles"], scale=options["sampling_scale"],
             solver="steady" if options["steady_solver"] else "cycles",
-            progress=ctx.progress, **solver,
+            progress=described(ctx.progress, f"uniqueness study at lam = {lam:.4g}: one run per "
+                               "initial state", "run"), **solver,
         )
         ctx.output.write_table("uniqueness.csv", _from_one(study.table))
         v0 = study.table[[f"initial_slip_{j}" for j in range(n)]].to_numpy(float)[0]
