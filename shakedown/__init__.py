@@ -19,11 +19,11 @@ from .model.errors import (
     ShakedownError,
     ShapeError,
     SolverError,
+    UnsafePathError,
 )
 from .model.loading import LoadCycle
 from .model.system import CriticalFriction, DiscreteSystem
-
-__version__ = "0.1.0"
+from .model.version import __version__ as __version__
 
 # analyses are imported lazily so that `import shakedown` stays light
 _LAZY = {
@@ -122,5 +122,6 @@ __all__ = [
     "SceneError",
     "ShakedownError",
     "SolverError",
+    "UnsafePathError",
     *_LAZY,
 ]

@@ -12,6 +12,7 @@ from .errors import (
     ShakedownError,
     ShapeError,
     SolverError,
+    UnsafePathError,
 )
 from .loading import LoadCycle
 from .system import CriticalFriction, DiscreteSystem
@@ -28,4 +29,5 @@ __all__ = [
     "ShakedownError",
     "ShapeError",
     "SolverError",
+    "UnsafePathError",
 ]

@@ -36,6 +36,10 @@ class MissingDependencyError(ShakedownError, ImportError):
     """An optional package is not installed; the message names the ``pip install`` command."""
 
 
+class UnsafePathError(InputError):
+    """A name or path would write outside the output folder or through a symbolic link."""
+
+
 class SolverError(ShakedownError, RuntimeError):
     """A numerical solver failed unexpectedly; ``partial`` holds whatever was computed."""
 

@@ -55,6 +55,7 @@ def _parser() -> argparse.ArgumentParser:
         epilog="Verdicts and details go to stdout, progress to stderr. "
                "See 'shakedown <command> --help' for the options of each analysis.",
     )
+    p.add_argument("--version", action="version", version=f"shakedown {_version()}")
     sub = p.add_subparsers(dest="command", required=True)
 
     def common(sp):
@@ -81,6 +82,12 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
+def _version() -> str:
+    from ..model.version import __version__
+
+    return __version__
+
+
 def _apply_overrides(scene, names, overrides):
     """``--set`` options applied (kept for callers of the 0.1 name; see :mod:`.options`)."""
     from .options import apply_overrides
@@ -91,7 +98,7 @@ def _apply_overrides(scene, names, overrides):
 def main(argv=None) -> int:
     args = _parser().parse_args(argv)
     try:
-        return _main(args)
+        return _main(args, sys.argv[1:] if argv is None else argv)
     except (SceneError, InputError, ShakedownError) as exc:
         print(f"shakedown: error: {exc}", file=sys.stderr)
         return 2
@@ -115,8 +122,9 @@ def format_value(value) -> str:
     return str(value)
 
 
-def _main(args) -> int:
-    from .files import builtin_scenes, load_scene, run_scene
+def _main(args, argv=()) -> int:
+    from .files import builder_module, builtin_scenes, load_scene, resolved_analyses, run_scene
+    from .manifest import RunRecord
     from .output import OutputFolder, Progress
 
     if args.command == "scenes":
@@ -130,6 +138,8 @@ def _main(args) -> int:
         scene = _apply_overrides(scene, run_names, args.set)
     out = OutputFolder(args.out or Path("shakedown-out") / scene.name)
     progress = Progress(enabled=not args.quiet)
+    record = RunRecord.start(scene, out, resolved_analyses(scene, run_names),  # provenance
+                             builder_module(scene.model["kind"]), argv)
     t0 = time.perf_counter()
     # whatever an analysis prints while it runs is a detail: shown after all verdicts
     printed = io.StringIO()
@@ -151,11 +161,12 @@ def _main(args) -> int:
     if printed.getvalue().strip():
         print("\n" + printed.getvalue().rstrip())
     meta = {"scene": scene.label, "analyses": summaries, "elapsed_s": elapsed,
-            "node_numbering": "from 1"}
+            "node_numbering": "from 1", "cite": record.cite()}
     out.write_json("summary.json", meta)
+    record.finish()
+    print(f"\n{record.cite()} (BibTeX: CITATIONS.bib)")
     print(f"\nresults written to {out.path}/ ({len(set(out.written))} files, {elapsed:.1f} s)")
     return 0
-
 
 if __name__ == "__main__":  # pragma: no cover
     sys.exit(main())

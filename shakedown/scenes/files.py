@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..model.errors import InputError, SceneError
+from .output import check_plain_name
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -142,6 +143,10 @@ def resolve_scene_path(scene: str | Path | None) -> Path:
 def load_scene(scene: str | Path | None = None) -> Scene:
     """Read and validate a scene file (or a built-in scene by name)."""
     path = resolve_scene_path(scene)
+    if path.suffix == ".json":  # a run's manifest.json: its resolved scene (scenes/manifest.py)
+        from .manifest import scene_from_manifest
+
+        return scene_from_dict(scene_from_manifest(path), path=path)
     try:
         raw = tomllib.loads(path.read_text())
     except tomllib.TOMLDecodeError as exc:
@@ -196,8 +201,15 @@ def scene_from_dict(raw: dict, path: Path | None = None) -> Scene:
     for name, opts in analyses_raw.items():
         analyses[name] = validate_options(label, name, opts)
     default_name = path.stem if path is not None else "scene"
+    name = meta.get("name", default_name)
+    if not isinstance(name, str):
+        raise SceneError(f"{label}: [scene] key 'name' = {name!r} must be a string")
+    try:
+        name = check_plain_name(name, "[scene] key 'name'")
+    except InputError as exc:
+        raise SceneError(f"{label}: {exc}") from None
     return Scene(
-        name=str(meta.get("name", default_name)),
+        name=name,
         description=str(meta.get("description", "")),
         model=dict(model),
         load=dict(load),
@@ -249,6 +261,12 @@ def validate_options(label: str, name: str, opts) -> dict:
     for key, (_, default, _) in schema.items():
         out.setdefault(key, default)
     return out
+
+
+def resolved_analyses(scene: Scene, names: list[str]) -> dict:
+    """``{name: options}`` of the analyses ``names`` as they run (every option filled)."""
+    return {name: scene.analyses.get(name) or validate_options(scene.label, name, {})
+            for name in names}
 
 
 def check_type(label, table, key, value, typ, help_=""):

@@ -48,6 +48,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..model import citations
 from ..model.errors import InputError, MissingDependencyError, SolverError
 from ..model.progress import progress_bar
 
@@ -385,7 +386,7 @@ class TaskRun:
 
 
 def _call(func, args, kwargs):
-    """Run one task in a worker; returns ``(rows, seconds)``."""
+    """Run one task in a worker; returns ``(rows, seconds, citation keys used there)``."""
     t0 = time.perf_counter()
     out = func(*args, **kwargs)
     if isinstance(out, pd.DataFrame):
@@ -394,7 +395,7 @@ def _call(func, args, kwargs):
         rows = [out]
     else:
         rows = [dict(r) for r in out]
-    return rows, time.perf_counter() - t0
+    return rows, time.perf_counter() - t0, citations.used()  # what to cite, from any worker
 
 
 class Workers:
@@ -628,7 +629,8 @@ def _execute(todo, st, backend, progress, desc, on_error, max_in_flight, flush_i
             for fut in backend.wait(list(pending), timeout=0.5):
                 key = pending.pop(fut)
                 try:
-                    rows, secs = fut.result()
+                    rows, secs, cited = fut.result()
+                    citations.register(*cited)
                 except BrokenProcessPool as exc:
                     raise SolverError(
                         f"a worker process died while running task {key!r} (killed, out of "

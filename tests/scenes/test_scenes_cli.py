@@ -54,6 +54,7 @@ def test_scene_builds_the_same_system_as_python(tmp_path):
     np.testing.assert_array_equal(system.K, ref.K)
     b1 = sd.shakedown_bounds(system, load)
     b2 = sd.shakedown_bounds(ref, sd.LoadCycle.from_harmonics([0, 0.1], [1, 1], q_cos=[1, 0], q_sin=[0, 1]))
+    # the same LPs on the same numbers: identical up to round-off
     assert b1.lam2 == pytest.approx(b2.lam2, rel=1e-12)
     assert extra is None
 
@@ -75,6 +76,7 @@ def test_cli_bounds_writes_json_csv_and_plots(tmp_path, capsys):
     assert "lam1" in printed and "lam2" in printed
     data = json.loads((out / "bounds.json").read_text())
     b = sd.shakedown_bounds(*__import__("shakedown.scenes", fromlist=["build"]).build(load_scene(scene))[:2])
+    # JSON keeps 17 digits: the same number up to round-off
     assert data["lam2"] == pytest.approx(b.lam2, rel=1e-12)
     assert (out / "constraints.csv").exists()
     assert (out / "bounds_vs_lam.png").stat().st_size > 1000

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from ...model.errors import SceneError
+from ...model.errors import SceneError, SolverError
 
 OPTIONS = {
     "lam": (float, 1.0, "load factor lam >= 0"),
@@ -107,6 +107,8 @@ def run(ctx, options: dict) -> dict:
             run_ = solve_cycles(system, load, lam, initial_slip=v0,
                                 max_cycles=options["max_cycles"], progress=cb,
                                 record_history=n == 2 and options["plots"], **solver)
+    if run_ is not None and run_.status == "non_finite":  # overflow is a failure (issue 10)
+        raise SolverError(f"[analyses.cycles] lam = {lam:g}: {run_.message}", partial=run_)
     summary = _summary(run_, lam, options, sc, study)
     verdict = cycles_verdict(run_, lam, _units(ctx)["energy"], study)
     summary = {"verdict": verdict, **summary}
@@ -119,6 +121,8 @@ def run(ctx, options: dict) -> dict:
     keys = ("verdict", "steady_dissipation", "period", "shook_down", "stuck_nodes", "n_cycles",
             "status")
     out = {k: summary[k] for k in keys}
+    if getattr(run_, "within_sampling_error", False):
+        out["sampling_warning"] = run_.message  # the verdict lies within the sampling error
     if study is not None:
         out.update(unique_dissipation=study.unique_dissipation,
                    dissipation_spread=study.dissipation_spread,
