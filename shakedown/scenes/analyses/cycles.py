@@ -261,9 +261,14 @@ def cycles_verdict(run, lam: float, energy: str = "[force x length]", study=None
         text = f"{at}, it shook down {when}: no node slips in the steady state (W = 0)."
     elif run.status == "periodic":
         slip = _slipping_nodes(run)
+        n = int(np.size(run.final_slip))
+        which = ""
+        if len(slip) > 12:
+            which = f", {len(slip)} of {n} nodes slip ({_node_list(slip)})"
+        elif slip:
+            which = f", {_node_list(slip)} slip"
         text = (f"{at}, cyclic slip: W = {run.steady_dissipation:.4g} {energy} per cycle, "
-                f"period {int(run.period)}"
-                + (f", {_node_list(slip)} slip" if slip else "") + ".")
+                f"period {int(run.period)}{which}.")
     elif run.status == "not_converged":
         W = np.asarray(run.dissipation, float)
         last = f" (last cycle: W = {W[-1]:.4g} {energy})" if W.size else ""
