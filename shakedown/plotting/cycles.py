@@ -169,7 +169,13 @@ def plot_steady_cycle(run, ax=None, *, nodes=None, units=None):
     """
     tab = _steady_frame(run)
     all_nodes = np.unique(tab["node"].to_numpy(int))
-    nodes = all_nodes[:10] if nodes is None else np.asarray(nodes, int)
+    subset = ""
+    if nodes is None and all_nodes.size > 10:
+        # the 10 nodes whose slip varies most over the cycle (stuck nodes are flat lines)
+        swing = tab.groupby("node")["slip"].agg(lambda x: float(x.max() - x.min()))
+        nodes = np.sort(swing.sort_values(ascending=False).index.to_numpy(int)[:10])
+        subset = f" (the 10 of {all_nodes.size} nodes whose slip varies most)"
+    nodes = all_nodes if nodes is None else np.asarray(nodes, int)
     if ax is None:
         fig, ax = _plt().subplots(2, 1, sharex=True, figsize=(6.4, 5.6))
     ax = np.asarray(ax).ravel()
@@ -184,9 +190,9 @@ def plot_steady_cycle(run, ax=None, *, nodes=None, units=None):
         ax[1].plot(sub["t"], sub["p"], color=c, ls="--", label=f"p node {j + 1}")
     ax[0].set_ylabel(f"slip v {_unit(units, 'length')}")
     ax[1].set_ylabel(f"q (solid), p (dashed) {_unit(units, 'force')}")
-    ax[0].set_title("steady cycle", fontsize=10)
+    ax[0].set_title("steady cycle" + subset, fontsize=10)
     ax[1].set_xlabel("t [cycles]")
-    ax[0].legend(fontsize="small")
+    ax[0].legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
     return ax
 
 
@@ -223,7 +229,9 @@ def plot_node_states(run, ax=None):
               vmin=-0.5, vmax=len(labels) - 0.5, extent=extent)
     ax.legend(handles=[Patch(color=cmap(i), label=s) for i, s in enumerate(labels)],
               fontsize="small", loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
-    ax.set_yticks(grid.index.to_numpy(int) if len(grid.index) <= 20 else ax.get_yticks())
+    if len(grid.index) <= 20:
+        ax.set_yticks(grid.index.to_numpy(int))
+    ax.set_ylim(extent[2], extent[3])  # exactly the nodes: no empty rows below the last
     ax.set_xlabel("t [cycles]")
     ax.set_ylabel("node")
     ax.set_title("node states over the steady cycle", fontsize=10)

@@ -317,7 +317,8 @@ def _plots(ctx, run, study, lam, options):
     if has_steady:
         fig, axs = plt.subplots(2, 1, sharex=True, figsize=(6.4, 5.6))
         plot_steady_cycle(run, axs, units=units)
-        axs[0].set_title(f"steady cycle at lam = {lam:.4g}", fontsize=10)
+        axs[0].set_title(f"steady cycle at lam = {lam:.4g}"
+                         + axs[0].get_title()[len("steady cycle"):], fontsize=10)
         ctx.output.save_figure("steady_cycle.png", fig)
         fig, ax = plt.subplots(figsize=(6.4, 3.5))
         plot_node_states(run, ax)
