@@ -219,3 +219,20 @@ def test_readme_python_example_prints_what_its_comments_say():
                 at = printed.find(fragment, pos)
                 assert at >= 0, (fragment, printed)
                 pos = at + len(fragment)
+
+
+def test_ci_script_runs_the_readme_commands_verbatim():
+    """.ci/run reads quick-start commands 1 and 2 from the README (so they cannot drift) and
+    runs command 1 in a fresh venv outside the repository, without a terminal or stdin."""
+    script = (ROOT / ".ci" / "run").read_text()
+    func = re.search(r"^readme_command\(\) \{.*?^\}", script, re.S | re.M).group(0)
+    lines = README.read_text().splitlines()
+    for n in (1, 2):
+        r = subprocess.run(["bash", "-c", f"{func}\nreadme_command {n}"], cwd=ROOT,
+                           capture_output=True, text=True, timeout=60)
+        at = next(i for i, ln in enumerate(lines) if ln.startswith(f"# {n}."))
+        assert r.stdout.strip() == lines[at + 1].strip() != "", (n, r.stdout, r.stderr)
+    assert 'python3 -m venv "$venv"' in script and "mktemp -d" in script
+    assert "exec </dev/null" in script and 'bash -euo pipefail -c "$quick_start"' in script
+    assert lines[lines.index("# 2. install and run the tests (this is exactly what .ci/run does)")
+                 + 1] == 'python3 -m pip install -q -e ".[test]" && python3 -m pytest'
