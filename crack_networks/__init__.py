@@ -31,6 +31,7 @@ from .kachanov import (
     KachanovModel,
     far_field_tractions,
     kachanov_model,
+    kachanov_stiffness,
     transmission_factors,
 )
 from .sampling import sample_crack_set
@@ -50,6 +51,7 @@ __all__ = [
     "transmission_factors",
     "far_field_tractions",
     "kachanov_model",
+    "kachanov_stiffness",
     "KachanovModel",
     "CrackNetworkModel",
     "Asymmetry",

@@ -6,7 +6,7 @@ A scene has four tables::
     name = "two-node coupled"
 
     [model]                 # how to build the DiscreteSystem; `kind` picks the builder
-    kind = "matrices"       # "matrices" | "crack_network" | "fe"
+    kind = "matrices"       # "matrices" | "crack_network" | "fe" | "half_plane"
     A = [[...]]             # builder-specific keys (see shakedown/scenes/builders/<kind>.py)
 
     [load]                  # the periodic welded reactions; keys depend on the model kind
@@ -42,6 +42,7 @@ MODEL_KINDS = {
     "matrices": "shakedown.scenes.builders.matrices",
     "crack_network": "shakedown.scenes.builders.crack_network",
     "fe": "shakedown.scenes.builders.fe",
+    "half_plane": "shakedown.scenes.builders.half_plane",
 }
 
 #: Analyses and the module that runs each.
