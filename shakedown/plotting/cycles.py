@@ -171,10 +171,13 @@ def plot_steady_cycle(run, ax=None, *, nodes=None, units=None):
     all_nodes = np.unique(tab["node"].to_numpy(int))
     subset = ""
     if nodes is None and all_nodes.size > 10:
-        # the 10 nodes whose slip varies most over the cycle (stuck nodes are flat lines)
-        swing = tab.groupby("node")["slip"].agg(lambda x: float(x.max() - x.min()))
+        # the 10 nodes that slip most while in contact (stuck nodes are flat lines, and the
+        # slip of an open node moves without friction or reactions)
+        contact = tab[tab["state"].astype(str).isin(["forward", "backward", "stick"])]
+        slipping = contact if len(contact) else tab
+        swing = slipping.groupby("node")["slip"].agg(lambda x: float(x.max() - x.min()))
         nodes = np.sort(swing.sort_values(ascending=False).index.to_numpy(int)[:10])
-        subset = f" (the 10 of {all_nodes.size} nodes whose slip varies most)"
+        subset = f" (the 10 of {all_nodes.size} nodes that slip most in contact)"
     nodes = all_nodes if nodes is None else np.asarray(nodes, int)
     if ax is None:
         fig, ax = _plt().subplots(2, 1, sharex=True, figsize=(6.4, 5.6))
@@ -252,13 +255,20 @@ def plot_uniqueness(study, ax=None, *, units=None):
     i = tab["state"].to_numpy(int) if "state" in tab else np.arange(len(tab))
     sd_ = tab["shook_down"].to_numpy(bool)
     ok = np.isfinite(W)
-    ax.plot(i[ok & sd_], W[ok & sd_], "o", mfc="none", label="shook down")
-    ax.plot(i[ok & ~sd_], W[ok & ~sd_], ".", ms=8, label="cyclic slip")
+    if (ok & sd_).any():  # a legend entry only for what is drawn
+        ax.plot(i[ok & sd_], W[ok & sd_], "o", mfc="none", label="shook down")
+    if (ok & ~sd_).any():
+        ax.plot(i[ok & ~sd_], W[ok & ~sd_], ".", ms=8, label="cyclic slip")
     if (~ok).any():
         ax.plot(i[~ok], np.zeros((~ok).sum()), "x", label="no steady cycle")
     from matplotlib.ticker import MaxNLocator
 
     ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    top = float(np.nanmax(W, initial=0.0)) if ok.any() else 0.0
+    # W >= 0 from 0: equal values are not blown up to rounding noise
+    top = top if top > 0 else 1.0
+    ax.set_ylim(-0.05 * top, 1.15 * top)  # markers at W = 0 drawn whole
+    ax.ticklabel_format(axis="y", useOffset=False)
     ax.set_xlabel("initial state (0: zero slip)")
     ax.set_ylabel(f"steady W per cycle {_unit(units, 'energy')}")
     ax.set_title("steady dissipation from each initial state", fontsize=10)
