@@ -38,13 +38,20 @@ def check_positive(name: str, value, *, unit: str = "") -> float:
     return x
 
 
-def check_count(name: str, value, minimum: int) -> int:
-    """``value`` as an integer ``>= minimum``; bools, NaN, fractions and text are refused."""
+#: Largest count (samples, steps per period, ...) accepted: 1e7 samples of one node already
+#: take 80 MB; more is a typo (e.g. 1e300), not a resolution anyone needs.
+MAX_COUNT = 10**7
+
+
+def check_count(name: str, value, minimum: int, maximum: int = MAX_COUNT) -> int:
+    """``value`` as an integer in ``[minimum, maximum]``; bools, NaN, fractions, text refused."""
     ok = isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
     if not ok and isinstance(value, (float, np.floating)) and np.isfinite(value):
         ok = float(value).is_integer()
     if not ok or int(value) < minimum:
         raise InputError(f"{name} must be an integer >= {minimum}; got {value!r}")
+    if int(value) > maximum:
+        raise InputError(f"{name} must be an integer <= {maximum:.0e}; got {value!r}")
     return int(value)
 
 
