@@ -144,6 +144,25 @@ def test_fuzz_classify_and_growth(gap, q, p, f, mu):
     survives(stab.layer_growth_rates, q, mu)
 
 
+@settings(FUZZ, max_examples=25)
+@given(lam=st.one_of(FLOATS, st.just("x")), states=st.one_of(st.integers(-1, 3), bad_arrays()),
+       n_evals=st.one_of(st.integers(-1, 3), ODD_FLOATS), times=bad_arrays(dims=(0, 1)))
+def test_fuzz_steady_uniqueness_cycle_stability(lam, states, n_evals, times):
+    from shakedown.evolution import steady_cycle, uniqueness_study
+
+    sc = survives(steady_cycle, SYSTEM, LOAD, lam, max_evaluations=n_evals, steps_per_cycle=16)
+    if sc is not None:
+        assert isinstance(sc.status, str)
+    u = survives(uniqueness_study, SYSTEM, LOAD, lam, states, steps_per_cycle=16,
+                 max_cycles=5)
+    if u is not None:
+        assert len(u.table) >= 1
+    run = sd.solve_cycles(SYSTEM, LOAD, 1.0, steps_per_cycle=16)
+    survives(stab.stability_along_cycle, SYSTEM, run, times=times)
+    survives(stab.stability_along_cycle, SYSTEM, times)
+    survives(sd.safe_region, SYSTEM, LOAD, lam)
+
+
 # ------------------------------------------------------------------ model builders
 @FUZZ
 @given(c=bad_arrays(dims=(0, 1, 2)), a=bad_arrays(dims=(0, 1)), ang=bad_arrays(dims=(0, 1)),
