@@ -3,7 +3,7 @@
 A scene has four tables::
 
     [scene]                 # optional: name, description
-    name = "two-node coupled"
+    name = "two-node coupled"   # a plain name (no '/', '\\', ':', '..'): the output folder
 
     [model]                 # how to build the DiscreteSystem; `kind` picks the builder
     kind = "matrices"       # "matrices" | "crack_network" | "fe"
