@@ -78,7 +78,13 @@ class StepSolver(FactorCache, ActiveSet, Fallbacks):
     cache_bytes : float
         Memory budget of the LU cache [bytes].
     max_update_rank : int
-        Largest number of changed nodes solved by a Woodbury update instead of a new LU.
+        Largest number of changed nodes solved by a Woodbury update instead of a new LU, at
+        least; see ``update_fraction``.
+    update_fraction : float
+        Above ``max_update_rank``, an update of rank ``r`` is still used while
+        ``r <= update_fraction * m`` (``m`` unknowns of the factorized system): its cost
+        ``~ 2 r m^2`` plus ``O(r N)`` gathers stays below a fresh LU's ``2/3 m^3`` (default 1/8:
+        about a third of it).  0 disables the proportional rule.
     update_min_size : int
         Woodbury updates are used only when the factorized system has at least this many
         unknowns; below it a fresh LU (cached for the next visit) is cheaper than the update's
@@ -92,7 +98,8 @@ class StepSolver(FactorCache, ActiveSet, Fallbacks):
 
     def __init__(self, system: DiscreteSystem, *, feas_tol: float = FEAS_TOL,
                  max_iter: int | None = None, cache_bytes: float = 256e6,
-                 max_update_rank: int = 6, update_min_size: int = 256,
+                 max_update_rank: int = 6, update_fraction: float = 0.125,
+                 update_min_size: int = 256,
                  enumerate_max_nodes: int = 4, check_uniqueness: bool = True):
         if not isinstance(system, DiscreteSystem):
             raise InputError(f"system must be a DiscreteSystem; got {type(system).__name__}")
@@ -114,6 +121,9 @@ class StepSolver(FactorCache, ActiveSet, Fallbacks):
         self.max_iter = 2 * n + 20 if max_iter is None else int(max_iter)
         self.cache_bytes = float(cache_bytes)
         self.max_update_rank = int(max_update_rank)
+        if not (np.isfinite(update_fraction) and 0 <= update_fraction < 1):
+            raise InputError(f"update_fraction must be in [0, 1); got {update_fraction}")
+        self.update_fraction = float(update_fraction)
         self.update_min_size = int(update_min_size)
         self.enumerate_max_nodes = int(enumerate_max_nodes)
         self.check_uniqueness = bool(check_uniqueness)

@@ -82,13 +82,16 @@ def test_warm_steps_equal_fresh_solver_and_lemke(seed):
 
 
 @pytest.mark.parametrize("seed", range(3))
-def test_woodbury_updates_equal_refactorisation(seed):
-    """Low-rank updates forced on every changed assignment against fresh LU factors only."""
+@pytest.mark.parametrize("rank", [dict(max_update_rank=8, update_fraction=0.0),
+                                  dict(max_update_rank=0, update_fraction=0.9)])
+def test_woodbury_updates_equal_refactorisation(seed, rank):
+    """Low-rank updates forced on every changed assignment (a fixed rank cap, or up to 90 % of
+    the factorized system's order) against fresh LU factors only."""
     rng = np.random.default_rng(10 + seed)
     n = 40
     s = coupled(rng, n, 0.4)
-    upd = StepSolver(s, update_min_size=0, max_update_rank=8)
-    ref = StepSolver(s, max_update_rank=0)
+    upd = StepSolver(s, update_min_size=0, **rank)
+    ref = StepSolver(s, max_update_rank=0, update_fraction=0.0)
     load = harmonic_load(rng, s, 1.0)
     qg, pg = load.evaluate(np.arange(1, 41) / 40, 1.0)
     v1 = v2 = np.zeros(n)
@@ -152,6 +155,8 @@ def test_batched_states_bad_input():
         sd.solve_cycles(s, load, 1.0, initial_slip=np.zeros((2, 3)), initial_gap=np.zeros((3, 3)))
     with pytest.raises(sd.InputError, match="n_states >= 1"):
         sd.solve_cycles(s, load, 1.0, initial_slip=np.zeros((0, 3)))
+    with pytest.raises(sd.InputError, match=r"update_fraction must be in \[0, 1\); got 1.5"):
+        StepSolver(s, update_fraction=1.5)
 
 
 # ---------------------------------------------------------------------------- self-checks
