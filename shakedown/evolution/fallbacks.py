@@ -55,7 +55,11 @@ class Fallbacks:
         rs = np.concatenate([self.diag[n:], self.diag[:n], self.diag[:n], np.ones(n)])
         # ... and divide by the force scale: Lemke's tie tolerances then see O(1) numbers in
         # any units (the LCP is homogeneous in (q, z))
-        res = lemke(rs[:, None] * M, rs * qv / scale)
+        # ... and measure lam (a displacement) by lam K_jj: every entry of the LCP is then
+        # dimensionless (without it the lam columns carry K_jj and rounding depends on units)
+        Ms = rs[:, None] * M
+        Ms[:, 3 * n:] /= self.diag[:n]
+        res = lemke(Ms, rs * qv / scale)
         self.totals["lemke_pivots"] += res.pivots
         x = res.z * scale
         p = x[:n]

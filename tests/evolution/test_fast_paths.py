@@ -244,3 +244,29 @@ def test_answers_are_scale_free(seed, k_exp, f_exp):
                                                                 abs=1e-9 * Wscale)
     np.testing.assert_allclose(b.final_slip * sK / sF, a.final_slip, rtol=0,
                                atol=slip_tol(s, a.force_scale))
+
+
+@pytest.mark.parametrize("sK, sF", [(3.7e-6, 2.1e11), (4.3e9, 7.7e-5), (1.0, 1.0)])
+def test_lemke_fallbacks_are_scale_free(sK, sF):
+    """Both Lemke fallbacks on the same step in other units give the same answer rescaled."""
+    rng = np.random.default_rng(5)
+    n = 6
+    s = coupled(rng, n)
+    s2 = sd.DiscreteSystem(sK * s.A, sK * s.B, sK * s.C, friction=s.friction)
+    q0 = 2.0 * rng.normal(size=n)
+    p0 = rng.uniform(-0.5, 1.5, n)  # some nodes pulled open
+    scale = float(max(np.abs(q0).max(), np.abs(p0).max()))
+    allowed, forced = np.ones((n, 4), bool), np.zeros(n, bool)
+    ref = StepSolver(s)._lemke_flexibility(q0, p0, scale)
+    assert ref.success
+    for name in ("flex", "mixed"):
+        a = (StepSolver(s)._lemke_flexibility(q0, p0, scale) if name == "flex" else
+             StepSolver(s)._lemke(q0, p0, allowed, forced, scale))
+        b = (StepSolver(s2)._lemke_flexibility(sF * q0, sF * p0, sF * scale) if name == "flex"
+             else StepSolver(s2)._lemke(sF * q0, sF * p0, allowed, forced, sF * scale))
+        assert a.success and b.success
+        np.testing.assert_array_equal(a.s, b.s)
+        # the slip tolerance of the step (answers of the same pivots, rounding ~1e-14)
+        tol = np.concatenate([slip_tol(s, scale) * np.ones(n), slip_tol(s, scale) * np.ones(n)])
+        np.testing.assert_array_less(np.abs(b.z * sK / sF - a.z), tol)
+        np.testing.assert_array_less(np.abs(a.z - ref.z), tol)
