@@ -15,9 +15,16 @@ the nodes whose signs are violated switch state (all at once; on a repeated assi
 time, the most violated first; on a second repetition, a singular matrix or an exhausted
 iteration budget, the LCP in ``(w, dv+, dv-)`` is solved by lexicographic Lemke, which always
 terminates).  Factorizations are reused: LU factors are cached per assignment (LRU, bounded in
-bytes) and an assignment within ``max_update_rank`` changed nodes of the last factorized one is
-solved by a Sherman-Morrison-Woodbury update of it, so a step in which few nodes change state
-costs a few triangular solves instead of a factorization.  Every answer is verified (natural
+bytes) and an assignment within ``max(max_update_rank, update_fraction * m)`` changed nodes of
+the last factorized one is solved by a Sherman-Morrison-Woodbury update of it, so a step in
+which few nodes change state costs a few triangular solves instead of a factorization.  A warm
+step (the guess is the answer, its factor cached) is one pair of triangular solves (LAPACK
+``getrs`` called directly), one product with the rows of ``K`` kept with the factor, and
+``O(N)`` vectorised sign checks; the cycle loop passes the step's base reactions
+(:meth:`StepSolver.next_base`) so that no product with all of ``K`` is needed per step.
+Modules: :mod:`.step_types` (codes, :class:`StepResult`), :mod:`.factors` (the LU cache and
+updates), :mod:`.active_set` (the iteration and its sign checks), :mod:`.fallbacks` (Lemke,
+enumeration); this module assembles them.  Every answer is verified (natural
 complementarity residuals, scaled per node) and the outcome is a status: below the critical
 friction (``system.critical_friction()``) the solution is ``"unique"``; above it, for
 ``N <= enumerate_max_nodes`` every state assignment is enumerated and the step is classified
