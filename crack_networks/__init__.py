@@ -15,7 +15,15 @@ Examples
 """
 
 from .bem import BEMModel, bem_model
-from .cracks import CrackSet, load_csv, save_csv, segment_distance
+from .cracks import (
+    KACHANOV_GAP_RATIO,
+    TOUCH_RTOL,
+    CrackSet,
+    KachanovAccuracyWarning,
+    load_csv,
+    save_csv,
+    segment_distance,
+)
 from .fields import crack_stress, isolated_compliance, segment_average_traction
 from .kachanov import (
     Asymmetry,
@@ -29,6 +37,9 @@ from .kachanov import (
 from .sampling import sample_crack_set
 
 __all__ = [
+    "KachanovAccuracyWarning",
+    "KACHANOV_GAP_RATIO",
+    "TOUCH_RTOL",
     "CrackSet",
     "sample_crack_set",
     "load_csv",

@@ -60,6 +60,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from shakedown.model import citations
 from shakedown.model.errors import InputError
 
 from .bem import elliptic_transmission_factors
@@ -286,6 +287,7 @@ def kachanov_model(
     >>> m.transmission_factors.shape
     (2, 2, 2, 2)
     """
+    citations.register("kachanov1987")
     cracks = _check_cracks(cracks)
     mu, nu = _check_material(shear_modulus, poisson_ratio)
     if weighting not in _WEIGHTINGS:
@@ -311,4 +313,5 @@ def kachanov_model(
     )
     if validate:
         model.system  # noqa: B018  (raises on indefinite K or bad friction)
+    cracks.warn_if_close(stacklevel=3)  # Kachanov's error is large for close pairs
     return model

@@ -19,9 +19,10 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from ..model import citations
 from ..model.errors import InputError, SolverError
+from ..model.progress import progress_bar
 from . import tables
-from .progress import Progress
 from .tables import KEY
 from .workers import Workers
 
@@ -184,7 +185,7 @@ def run_tasks(
 def _execute(todo, st, backend, progress, desc, on_error, max_in_flight, flush_interval,
              n_total, n_resumed, failed):
     window = max_in_flight or (1 if backend.kind == "inline" else 2 * backend.slots)
-    bar = Progress(n_total, n_resumed, desc) if progress else None
+    bar = progress_bar(n_total, desc=desc, initial=n_resumed, unit="task") if progress else None
     buffer: list[dict] = []
     last_flush = time.perf_counter()
     pending: dict = {}
@@ -204,7 +205,8 @@ def _execute(todo, st, backend, progress, desc, on_error, max_in_flight, flush_i
             for fut in backend.wait(list(pending), timeout=0.5):
                 key = pending.pop(fut)
                 try:
-                    rows, secs = fut.result()
+                    rows, secs, cited = fut.result()
+                    citations.register(*cited)
                 except BrokenProcessPool as exc:
                     raise SolverError(
                         f"a worker process died while running task {key!r} (killed, out of "

@@ -29,7 +29,8 @@ import time
 
 import numpy as np
 
-from ..model.errors import InputError
+from ..model import citations
+from ..model.errors import InputError, MissingDependencyError
 
 __all__ = ["Workers", "WATCH_SECONDS", "call_task"]
 
@@ -64,7 +65,7 @@ def _worker_init(parent: int, blas_threads: int | None) -> None:
 
 
 def call_task(func, args, kwargs, blas_threads=None):
-    """Run one task; returns ``(rows, seconds)`` (rows: a list of dicts)."""
+    """Run one task; returns ``(rows, seconds, citation keys used there)`` (rows: dicts)."""
     import pandas as pd
 
     limit_blas_threads(blas_threads)
@@ -76,7 +77,7 @@ def call_task(func, args, kwargs, blas_threads=None):
         rows = [out]
     else:
         rows = [dict(r) for r in out]
-    return rows, time.perf_counter() - t0
+    return rows, time.perf_counter() - t0, citations.used()  # what to cite, from any worker
 
 
 def check_scheduler(scheduler) -> None:
@@ -128,9 +129,10 @@ class Workers:
         if scheduler is not None:
             try:
                 import distributed
-            except ImportError as exc:
-                raise InputError(f'scheduler needs Dask ({exc}): pip install '
-                                 '"shakedown[parallel]"') from None
+            except ImportError as exc:  # Dask is the one optional extra (issue 9)
+                raise MissingDependencyError(
+                    f"scheduler = {scheduler!r} needs Dask ({exc}): pip install "
+                    "\"shakedown[parallel]\"") from exc
             self._distributed = distributed
             if isinstance(scheduler, distributed.Client):
                 self._client = scheduler

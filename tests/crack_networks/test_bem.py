@@ -75,7 +75,9 @@ def test_kachanov_against_bem_on_a_random_set():
     off = ~np.kron(np.eye(n), np.ones((2, 2))).astype(bool)
     Kk, Kb = km.stiffness, bm.stiffness
     rel = np.linalg.norm((Kk - Kb)[off]) / np.linalg.norm(Kb[off])
-    assert rel < 0.25  # measured 0.13 (the close pairs dominate)
+    # Kachanov's line-average approximation vs the converged BEM: measured 0.130 (the close
+    # pairs dominate); 0.16 allows the BEM's own error (16 modes, < 1e-6) and 20% margin
+    assert rel < 0.16
     _, Bk, _, _ = km.blocks()
     _, Bb, _, _ = bm.blocks()
     # off-diagonal entries above 5% of the largest agree in sign; the diagonal B_ii is zero in
@@ -87,7 +89,9 @@ def test_kachanov_against_bem_on_a_random_set():
     bk = sd.shakedown_bounds(km.system, km.load_cycle(), adjacency=False)
     bb = sd.shakedown_bounds(bm.system, bm.load_cycle(), adjacency=False)
     assert bk.lam1 <= bk.lam2 + 1e-7 and bb.lam1 <= bb.lam2 + 1e-7
-    assert abs(bk.lam2 / bb.lam2 - 1) < 0.05  # measured 1e-3 on this set
+    # measured 9.9e-4 on this set (the stiffness error of 13% enters lam2 only through the
+    # interaction terms, ~density 0.1 of it); 2e-3 is 2x that
+    assert abs(bk.lam2 / bb.lam2 - 1) < 2e-3
 
 
 def test_bem_bad_input():
@@ -100,16 +104,24 @@ def test_bem_bad_input():
         cn.bem_model(cs, poisson_ratio=0.7)
 
 
-def test_reference_csv_matches_the_models():
-    # data/reference/two_collinear_cracks.csv (written by benchmarks/bench_kachanov.py
-    # --write-reference): the exact values and the models' values must stay reproducible
-    from pathlib import Path
+def test_exact_collinear_solution_limits():
+    """Independent analytic limits of the exact two-collinear-crack amplification (replaces a
+    test that compared two columns of a CSV the benchmark itself wrote).
 
-    path = Path(__file__).resolve().parents[2] / "data" / "reference" / "two_collinear_cracks.csv"
-    data = np.loadtxt(path, delimiter=",", comments="#", skiprows=4)
-    gaps = data[:, 0]
-    np.testing.assert_allclose(collinear_exact_amplification(gaps), data[:, 1], rtol=1e-11)
-    for g, kach in zip(gaps, data[:, 2], strict=True):
-        amp = _amplification(cn.kachanov_model(_collinear(g)))[0]
-        np.testing.assert_allclose(amp, kach, rtol=1e-11)
-    np.testing.assert_allclose(data[:, 4], data[:, 1], rtol=1e-8)  # BEM 32 = exact
+    * Far apart (centre distance d = 2a + g >> a): Kachanov's first-order interaction, the
+      stress ahead of a uniformly opened crack s (x / sqrt(x^2 - a^2) - 1) averaged over the
+      other crack, gives amplification 1 + a^2 / (2 d^2) + O(a^4 / d^4); measured relative
+      error of the increment 2 a^2 / d^2 (1.4e-2 at g = 10a, 7.4e-4 at g = 50a), bounded here
+      by 3 a^2 / d^2.
+    * Touching (g -> 0): one crack of half-length 2a, whose mean opening over either half is
+      pi a / 2 against pi a / 4 for the isolated crack: amplification -> 2 (measured 2 + 1e-10
+      at g = 1e-10 a).
+    """
+    for g in (10.0, 50.0, 200.0):
+        d = 2.0 + g
+        inc = collinear_exact_amplification(g) - 1.0
+        assert abs(inc / (1 / (2 * d**2)) - 1) < 3 / d**2, g
+    assert collinear_exact_amplification(1e-10) == pytest.approx(2.0, abs=1e-8)
+    # and monotone in between (interaction decays with distance)
+    gaps = np.geomspace(1e-6, 1e2, 40)
+    assert np.all(np.diff(collinear_exact_amplification(gaps)) < 0)

@@ -95,6 +95,7 @@ def test_implicit_converges_to_events_first_order(n, p0):
     errs = []
     for m in (70, 280, 1120):
         run = sd.solve_cycles(s, load, 1.0, steps_per_cycle=m)
+        # every step verified to FEAS_TOL = 1e-9 (relative natural residual)
         assert run.status == "periodic" and run.max_residual <= 1e-9
         errs.append(abs(run.steady_dissipation - ev.steady_dissipation) / ev.steady_dissipation)
     # backward Euler with end-of-step q: first order in 1/m (factor 4 per refinement; >= 2.5)
@@ -138,6 +139,7 @@ def test_oracle_step_by_step_along_an_evolution_with_separation():
             rows = h[(h["cycle"] == c) & np.isclose(h["t"], t)].sort_values("node")
             q_w, p_w = load.evaluate(t, 1.0)
             (vv, ww, qq, pp), = oracle(s, v, q_w, p_w)
+            # two solves of the same small linear systems (force and stiffness ~1): ~1e-13
             np.testing.assert_allclose(rows["slip"], vv, atol=1e-9)
             np.testing.assert_allclose(rows["gap"], ww, atol=1e-9)
             np.testing.assert_allclose(rows["p"], pp, atol=1e-9)
@@ -255,9 +257,13 @@ def test_stiffness_ratio_1e8():
     ev = sd.solve_cycles(s, load, 1.0, method="events")
     im = sd.solve_cycles(s, load, 1.0, steps_per_cycle=3000)
     assert ev.status == im.status == "periodic"
+    # steps verified to FEAS_TOL = 1e-9; the event path's energy identity is exact (affine
+    # between events) up to the same tolerance
     assert ev.max_residual <= 1e-9 and im.max_residual <= 1e-9
     assert ev.energy_identity.relative_difference <= 1e-9
-    assert im.steady_dissipation == pytest.approx(ev.steady_dissipation, rel=2e-3)
+    # implicit (3000 steps, on the sample breakpoints) vs exact events: measured 1.3e-5
+    # relative (second-order time discretisation); 4e-5 is 3x that
+    assert im.steady_dissipation == pytest.approx(ev.steady_dissipation, rel=4e-5)
     # both nodes slip: the stiff one with slips ~1e-8, still detected as slipping
     assert ev.stuck_nodes.size == 0 and np.ptp(ev.steady_table.query("node == 1")["slip"]) > 0
 
@@ -277,10 +283,13 @@ def test_nodes_open_and_close_every_cycle():
         assert (gap_open["gap"] >= 0).all() and (gap_open["gap"] > 0).any()
         np.testing.assert_allclose(gap_open["p"], 0, atol=1e-9 * run.force_scale)
     ev = sd.solve_cycles(s, load, 1.0, method="events")
-    assert run.steady_dissipation == pytest.approx(ev.steady_dissipation, rel=2e-2)
+    # implicit with 400 steps vs exact events: measured -8.9e-3 relative (opening and closing
+    # events fall between steps: first-order error there); 1.5e-2 is 1.7x that
+    assert run.steady_dissipation == pytest.approx(ev.steady_dissipation, rel=1.5e-2)
 
 
-@pytest.mark.slow  # ~10-25 s on 2 busy cores, mostly building and checking the 4000 x 4000 K
+# in the default run since the step work of issue 14: 4.4 s on 2 busy cores (load 7), mostly
+# building and checking the 4000 x 4000 K (Cholesky) and four fresh LU factorizations
 def test_n2000_a_few_steps():
     rng = np.random.default_rng(0)
     n = 2000
@@ -391,6 +400,8 @@ def test_load_factor_exactly_at_lam1_and_lam2():
         for method in ("implicit", "events"):
             r = sd.solve_cycles(s, load, b.lam2, initial_slip=v0, steps_per_cycle=64,
                                 max_cycles=400, method=method)
+            # at lam2 the steps are degenerate (a constraint is tight): 10 x FEAS_TOL allowed,
+            # the Lemke fallback's acceptance threshold
             assert r.status == "periodic" and r.max_residual <= 1e-8
             if r.shook_down:
                 # the only safe state left.  The approach to it is geometric and the run stops once

@@ -2,8 +2,10 @@
 
 Siconos (Debian ``python3-siconos``) imports only under ``/usr/bin/python3``; the LCPs of a few
 implicit steps are handed to ``benchmarks/siconos_lcp_worker.py`` in a subprocess (as the
-benchmark ``benchmarks/bench_evolution.py --parts s`` does).  Marked slow (a subprocess start
-and the Siconos import take seconds) and skipped when Siconos is missing.
+benchmark ``benchmarks/bench_evolution.py --parts s`` does).  Marked ``peers``: it runs in the
+peers job (``python3 -m pytest -m peers``, recorded in benchmarks/RESULTS_peers.md) and is
+skipped with that reason in the default run; in the peers job a missing Siconos is a skip that
+names the Debian package to install.
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ def _bench():
     return mod
 
 
-@pytest.mark.slow
+@pytest.mark.peers
 def test_siconos_pivoting_solvers_agree_with_the_step_solver(tmp_path):
     """N = 5 coupled system (friction at half the sufficient critical value, so each step has
     exactly one solution, MODEL.md s.4): 8 steps along the first load period.  Siconos'
@@ -38,7 +40,7 @@ def test_siconos_pivoting_solvers_agree_with_the_step_solver(tmp_path):
     see benchmarks/RESULTS_evolution.md.)"""
     bench = _bench()
     if not bench.siconos_available():
-        pytest.skip("Siconos is unavailable under /usr/bin/python3")
+        pytest.skip("Siconos is unavailable under /usr/bin/python3: apt-get install python3-siconos")
     s, load = bench.coupled_system(5, seed=105)
     solver = StepSolver(s)
     steps = 8

@@ -65,6 +65,7 @@ def test_is_coupled():
 def test_single_node_critical_friction():
     s = sd.DiscreteSystem([[2.0]], [[0.5]], [[3.0]], friction=0.4)
     cf = s.critical_friction()
+    # closed form A / (|B| f): one division, exact to round-off
     assert cf.exact and cf.factor == pytest.approx(2.0 / 0.5 / 0.4, rel=1e-12)
     assert cf.value == pytest.approx(2.0 / 0.5, rel=1e-12)
 
@@ -89,3 +90,25 @@ def test_sufficient_bound_below_exact(seed):
     bound = system.critical_friction(max_exact_nodes=0)
     assert not bound.exact and bound.method == "sufficient-bound"
     assert bound.factor <= exact.factor * (1 + 1e-12)
+    # a sufficient bound: below it every M_S(alpha) is a P-matrix (brute force, independent)
+    assert all_minors_positive(system, bound.factor * (1 - 1e-6))
+
+
+@pytest.mark.parametrize("n,seed,units", [(3, 0, 1.0), (4, 1, 1e-6), (5, 2, 3.7e9)])
+def test_sufficient_bound_closed_form_with_internode_coupling(n, seed, units):
+    """A = a I, C = c I, B = b R with R a random orthogonal matrix (every node couples to every
+    other).  The Schur complement is A - B C^-1 B^T = (a - b^2 / c) I and f C f = f^2 c I, so the
+    sufficient bound of MODEL.md s.4 / the docstring is alpha_s = sqrt(a c - b^2) / (c f),
+    below the necessary single-node bound min_j a / (|b R_jj| f) >= a / (b f).  (The issue-15
+    audit: with A in place of the Schur complement the bound becomes sqrt(a / c) / f and
+    `bound <= exact` alone did not notice.)  Units: K scaled by `units` leaves alpha unchanged."""
+    a, b, c, f = 2.0, 1.3, 1.5, 0.4
+    R, _ = np.linalg.qr(np.random.default_rng(seed).standard_normal((n, n)))
+    system = sd.DiscreteSystem(units * a * np.eye(n), units * b * R, units * c * np.eye(n), f)
+    bound = system.critical_friction(max_exact_nodes=0)
+    assert bound.method == "sufficient-bound"
+    # eigenvalues of well-conditioned 5x5 matrices: relative error ~1e-15; 1e-12 is generous
+    assert bound.factor == pytest.approx(np.sqrt(a * c - b**2) / (c * f), rel=1e-12)
+    assert bound.value == pytest.approx(np.sqrt(a * c - b**2) / c, rel=1e-12)
+    if n <= 3:  # and it is a true lower bound of the exact factor (enumeration, N <= 3)
+        assert bound.factor <= system.critical_friction().factor * (1 + 1e-12)

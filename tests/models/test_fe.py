@@ -213,7 +213,9 @@ def test_interface_with_rigid_like_body_approaches_rigid_contact():
     cm_if = two_bodies(mat, fe.isotropic(1e7, 0.3)).condense()
     cm_rigid = fe.FEModel(fe.rectangle(1, 1, 6, 6), mat, dirichlet=["top"],
                           contact=["bottom"]).condense()
-    np.testing.assert_allclose(cm_if.K, cm_rigid.K, atol=1e-5 * np.abs(cm_rigid.K).max())
+    # the lower body's compliance is 1e-7 of the upper one's: measured difference 1.4e-7 of
+    # max|K| (first order in the stiffness ratio); 1e-6 is 7x that
+    np.testing.assert_allclose(cm_if.K, cm_rigid.K, atol=1e-6 * np.abs(cm_rigid.K).max())
 
 
 # ----------------------------------------------------------------- condensation == full model

@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from shakedown import fe
+from shakedown import InputError, fe
 
 EXACT = 1e-9  # round-off level of these small models (cond(K_ii) <= 1e5, see test_fe.py)
 
@@ -119,16 +119,38 @@ def test_convergence_rates_manufactured_solution(element, rates):
     assert slopes[0] < rates[0] + 0.3 and slopes[1] < rates[1] + 0.3, slopes
 
 
+def valid_nu12(E1, fraction, E2=1.0, nu23=0.3):
+    """A Poisson ratio ``nu12`` inside the valid range of the material: the 3-D compliance of
+    :func:`fe.transversely_isotropic` is positive definite iff ``|nu23| < 1`` and
+    ``nu12^2 < E1 (1 - nu23) / (2 E2)``; ``fraction`` in [0, 1) of that bound (capped at 0.45).
+
+    Drawing ``nu12`` independently of ``E1`` (the old strategy) produced invalid materials,
+    e.g. ``E1 = 0.5, nu12 = 0.4375``, and the test then failed with InputError in about one
+    run in six (issue 15)."""
+    return fraction * min(0.45, np.sqrt(E1 * (1 - nu23) / (2 * E2)))
+
+
+def test_valid_nu12_strategy_stays_inside_the_range_and_the_old_draw_did_not():
+    # the corner the old strategy hit is refused by the material (a clear InputError) ...
+    with pytest.raises(InputError, match="nu12"):
+        fe.transversely_isotropic(0.5, 1.0, 0.4375, 0.3, 0.2, 0.0)
+    # ... and the new strategy's extreme corners are accepted
+    for E1 in (0.5, 16.0):
+        fe.transversely_isotropic(E1, 1.0, valid_nu12(E1, 0.95), 0.3, 0.2, 0.0)
+
+
 @settings(max_examples=15, deadline=None)
 @given(
-    E1=st.floats(0.5, 16.0), theta=st.floats(0.0, np.pi), nu12=st.floats(0.0, 0.45),
+    E1=st.floats(0.5, 16.0), theta=st.floats(0.0, np.pi), nu12_fraction=st.floats(0.0, 0.95),
     nx=st.integers(2, 6), ny=st.integers(1, 4),
     element=st.sampled_from(["P1", "P2", "Q1"]),
     pattern=st.sampled_from(list(fe.PATTERNS)),
     plane=st.sampled_from(["strain", "stress"]),
 )
-def test_condensed_K_is_spd_for_any_held_body(E1, theta, nu12, nx, ny, element, pattern, plane):
-    mat = fe.transversely_isotropic(E1, 1.0, nu12, 0.3, 0.2, theta, plane=plane)
+def test_condensed_K_is_spd_for_any_held_body(E1, theta, nu12_fraction, nx, ny, element, pattern,
+                                              plane):
+    mat = fe.transversely_isotropic(E1, 1.0, valid_nu12(E1, nu12_fraction), 0.3, 0.2, theta,
+                                    plane=plane)
     mesh = fe.rectangle(1.3, 0.7, nx, ny, element=element, pattern=pattern)
     cm = fe.FEModel(mesh, mat, dirichlet=["top"], contact=["bottom", "left"]).condense()
     assert np.array_equal(cm.K, cm.K.T)

@@ -1,6 +1,7 @@
 """Cross-check against an independent FE code: GetFEM (Debian python3-getfem, runs only under
-the system interpreter /usr/bin/python3, so it is called in a subprocess).  Skipped when it is
-not installed."""
+the system interpreter /usr/bin/python3, so it is called in a subprocess).  Marked ``peers``:
+run by ``python3 -m pytest -m peers`` (recorded in benchmarks/RESULTS_peers.md), skipped with that
+reason in the default run, and skipped with the install command when GetFEM is missing."""
 
 import json
 import shutil
@@ -61,8 +62,10 @@ def _has_getfem():
     return r.returncode == 0
 
 
-@pytest.mark.skipif(not _has_getfem(), reason="GetFEM (python3-getfem) not installed")
+@pytest.mark.peers
 def test_condensed_square_matches_getfem():
+    if not _has_getfem():
+        pytest.skip("GetFEM is unavailable under /usr/bin/python3: apt-get install python3-getfem")
     # seed 000 s.7.1 square: on the bottom t = +x, -n = +y, so (v, w) = (u_x, u_y) and our
     # K must equal GetFEM's plain Schur complement in (u_x of bottom nodes, u_y of them)
     mesh = fe.rectangle(1.0, 1.0, 10, 10, pattern="union-jack")

@@ -54,6 +54,7 @@ def test_scene_builds_the_same_system_as_python(tmp_path):
     np.testing.assert_array_equal(system.K, ref.K)
     b1 = sd.shakedown_bounds(system, load)
     b2 = sd.shakedown_bounds(ref, sd.LoadCycle.from_harmonics([0, 0.1], [1, 1], q_cos=[1, 0], q_sin=[0, 1]))
+    # the same LPs on the same numbers: identical up to round-off
     assert b1.lam2 == pytest.approx(b2.lam2, rel=1e-12)
     assert extra is None
 
@@ -75,6 +76,7 @@ def test_cli_bounds_writes_json_csv_and_plots(tmp_path, capsys):
     assert "lam1" in printed and "lam2" in printed
     data = json.loads((out / "bounds.json").read_text())
     b = sd.shakedown_bounds(*__import__("shakedown.scenes", fromlist=["build"]).build(load_scene(scene))[:2])
+    # JSON keeps 17 digits: the same number up to round-off
     assert data["lam2"] == pytest.approx(b.lam2, rel=1e-12)
     assert (out / "constraints.csv").exists()
     assert (out / "bounds_vs_lam.png").stat().st_size > 1000
@@ -104,7 +106,11 @@ def test_console_script_runs_default_scene(tmp_path):
         (("A = [[2.0, 0.5], [0.5, 2.0]]", "A = [[2.0, 0.5], [0.7, 2.0]]"), ["symmetric", "A[0,1]"]),
         (("A = [[2.0, 0.5], [0.5, 2.0]]", "A = [[2.0, 0.5, 1.0], [0.5, 2.0, 1.0]]"), ["A", "shape"]),
         (("A = [[2.0, 0.5], [0.5, 2.0]]", "A = [[-2.0, 0.5], [0.5, 2.0]]"), ["positive definite"]),
-        (("q0 = [0.0, 0.1]", "q0 = [0.0, 0.1, 3.0]"), ["[load]", "p0", "shape (3,)", "(2,)"]),
+        (("q0 = [0.0, 0.1]", "q0 = [0.0, 0.1, 3.0]"), ["[load]", "'q0'", "one value per node (2 nodes)", "[0.0, 0.1, 3.0]"]),
+        (("p0 = [1.0, 1.0]", "p0 = [1.0]"), ["[load]", "'p0'", "one value per node (2 nodes)"]),
+        (("friction = 0.4", "friction = \"0.7\""), ["[model]", "'friction'", "'0.7'", "not a number", "without quotes"]),
+        (("friction = 0.4", "friction = true"), ["[model]", "'friction'", "boolean true", "not a number"]),
+        (("friction = 0.4", "friction = [0.4, \"0.7\"]"), ["[model]", "'friction'", "'0.7'", "not a number"]),
         (("q0 = [0.0, 0.1]", "q00 = [0.0, 0.1]"), ["[load]", "'q00'", "allowed"]),
         (("q_cos = [1.0, 0.0]", "q1 = [[1.0, 0.0], [0.0, 1.0]]"), ["either harmonics", "samples"]),
         (("plots = false", "plots = 3"), ["[analyses.bounds]", "'plots'", "3", "bool"]),

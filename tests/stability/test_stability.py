@@ -187,7 +187,10 @@ def test_random_systems_power_iteration_agreement_rate():
         p = mceip_mu(pen, method="power")
         agree += p.found and abs(p.mu - e.mu) <= 1e-9 * e.mu
     assert found >= 30
-    assert agree >= 0.5 * found
+    # measured on these 60 fixed systems: 52 with a solution, the power iteration finds one on
+    # 41 and the certified minimum on 40 (77%); 70% leaves room for a change of start vector
+    # without accepting an iteration that fails on a third of the cases
+    assert agree >= 0.7 * found
 
 
 def test_residuals_detect_violations():

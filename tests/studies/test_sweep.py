@@ -244,7 +244,7 @@ def test_progress_reports_counts_and_time_left():
 def test_progress_of_a_sweep_goes_to_stderr(tmp_path, capsys):
     run_tasks(tasks_for(3), tmp_path / "s", desc="demo")
     err = capsys.readouterr().err
-    assert "demo: 0/3 tasks" in err and "demo: 3/3 tasks" in err
+    assert "demo:" in err and "0/3" in err and "3/3" in err  # tqdm lines on stderr
 
 
 # ------------------------------------------------------------------ the crack-network study
@@ -385,6 +385,8 @@ def test_system_sweep_on_an_uncoupled_two_node_system(tmp_path):
     assert len(rows) == 6
     for lam, g in rows.groupby("lam"):
         exact = np.sum(np.clip(4 * f * P * (lam * Q1 - f * P) / k, 0, None))
+        # uncoupled nodes, 16 steps hitting the harmonic's extremes: exact up to the steady-state
+        # tolerance (1e-10 relative change per cycle) and round-off
         np.testing.assert_allclose(g["W"], exact, rtol=1e-9, atol=1e-12)
 
 
