@@ -9,9 +9,9 @@ and the verdict (:mod:`.summary`).  Load factors and states: :mod:`.design`.
 
 Work per run
 ------------
-One task per (realisation, load factor) runs *all* initial states together through
-``solve_cycles``' batched path (one step solver; states that share an active set are solved
-by one multi-right-hand-side solve, so factorisations are computed once); the system (Kachanov
+One task per (realisation, load factor) runs *all* initial states with one step solver, so the
+factorisations of the active sets that the states share are computed once (the solver caches
+them); the system (Kachanov
 matrices, critical friction) is built once per realisation and process (:func:`realisation_model`,
 cached); the bounds skip the separation LP the study does not use.
 
@@ -104,15 +104,19 @@ def _point_task(spec: SweepSpec, r: int, point: str, lam: float, lam2: float,
     _, model, load = realisation_model(spec, r)
     system = model.system
     states = _states(spec, r, safe_state)
-    # all states together (solve_cycles' batched path: one solver, shared factorisations),
-    # built afresh for this task only, states in a fixed order: deterministic
+    # one step solver for the states of this task only, states in a fixed order:
+    # deterministic.  The states run one after the other: solve_cycles' batched path (2-D
+    # initial_slip) was measured 2x slower per run on the default network (0.9 s against
+    # 0.4 s per run, benchmarks/RESULTS_study.md), so it is not used here.
+    solver = StepSolver(system)
     rows = []
-    for j, row in enumerate(run_row(system, load, lam, states, spec.solver_options(),
-                                    step_solver=StepSolver(system))):
-        rows.append(dict(realisation=r, point=point, lam=float(lam),
-                         x=float(lam / lam2) if lam2 > 0 else np.nan, state=j,
-                         state_kind=state_kind(j), **row))
-        rows[-1]["W_star"] = float(model.normalised_dissipation(row["W"], p0=spec.p0))
+    for j, v0 in enumerate(states):
+        row = dict(realisation=r, point=point, lam=float(lam),
+                   x=float(lam / lam2) if lam2 > 0 else np.nan, state=j,
+                   state_kind=state_kind(j))
+        row.update(run_row(system, load, lam, v0, spec.solver_options(), step_solver=solver))
+        row["W_star"] = float(model.normalised_dissipation(row["W"], p0=spec.p0))
+        rows.append(row)
     return rows
 
 
