@@ -57,7 +57,7 @@ def M(id, area, file, original, replacement, tests, what):
 T_STEP = "tests/evolution/test_complementarity.py tests/evolution/test_step_self_checks.py"
 T_BOUNDS = "tests/bounds/test_bounds.py tests/bounds/test_bounds_oracles.py tests/bounds/test_lp.py"
 T_EVO = "tests/evolution/test_evolution.py tests/evolution/test_study_outputs.py"
-T_STEADY = "tests/evolution/test_steady.py"
+T_STEADY = "tests/evolution/test_steady.py tests/evolution/test_study_outputs.py"
 T_UNIQ = "tests/evolution/test_uniqueness.py tests/evolution/test_study_outputs.py"
 T_SWEEP = "tests/studies/test_sweep.py tests/studies/test_sweep_outputs.py"
 T_KACH = "tests/crack_networks/test_kachanov.py tests/crack_networks/test_kachanov_oracles.py"
