@@ -160,3 +160,18 @@ def test_natural_slip_scale_is_its_documented_formula(units):
         expected = (f * np.abs(p0) + np.abs(q0)
                     + lam * (np.abs(q1).max(axis=0) + f * np.abs(p1).max(axis=0))) / np.diag(s.A)
         np.testing.assert_allclose(natural_slip_scale(s, load, lam), expected, rtol=1e-7)
+
+
+def test_unsettled_runs_prevent_a_unique_verdict():
+    """UniquenessStudy.unique_dissipation needs *every* run to reach a steady cycle.  Seed 002
+    Fig. 8 system (memory fades by 0.67 per cycle): from its steady start a run settles at once,
+    from (-0.3, 0.3) it needs ~100 cycles, so with max_cycles = 10 one run is unsettled; the one
+    settled W alone (spread 0) must not make the verdict 'unique'."""
+    p = gallery.fig8_coupled_one_at_a_time()
+    sc = sd.steady_cycle(p.system, p.load, p.lam, steps_per_cycle=p.steps_per_cycle)
+    states = np.array([sc.slip, [-0.3, 0.3]])
+    study = uniqueness_study(p.system, p.load, p.lam, states, n_jobs=1,
+                             steps_per_cycle=p.steps_per_cycle, max_cycles=10)
+    assert list(study.table["period"] > 0) == [True, False], study.table
+    assert study.fraction_steady == 0.5 and study.dissipation_spread == 0.0
+    assert not study.unique_dissipation
