@@ -15,7 +15,15 @@ Examples
 """
 
 from .bem import BEMModel, bem_model
-from .cracks import CrackSet, load_csv, save_csv, segment_distance
+from .cracks import (
+    KACHANOV_GAP_RATIO,
+    TOUCH_RTOL,
+    CrackSet,
+    KachanovAccuracyWarning,
+    load_csv,
+    save_csv,
+    segment_distance,
+)
 from .fields import crack_stress, isolated_compliance, segment_average_traction
 from .kachanov import (
     Asymmetry,
@@ -23,11 +31,15 @@ from .kachanov import (
     KachanovModel,
     far_field_tractions,
     kachanov_model,
+    kachanov_stiffness,
     transmission_factors,
 )
 from .sampling import sample_crack_set
 
 __all__ = [
+    "KachanovAccuracyWarning",
+    "KACHANOV_GAP_RATIO",
+    "TOUCH_RTOL",
     "CrackSet",
     "sample_crack_set",
     "load_csv",
@@ -39,6 +51,7 @@ __all__ = [
     "transmission_factors",
     "far_field_tractions",
     "kachanov_model",
+    "kachanov_stiffness",
     "KachanovModel",
     "CrackNetworkModel",
     "Asymmetry",

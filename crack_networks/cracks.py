@@ -17,9 +17,26 @@ from scipy.spatial import cKDTree
 
 from shakedown.model.errors import InputError, ShapeError
 
-__all__ = ["CrackSet", "segment_distance", "load_csv", "save_csv"]
+__all__ = ["CrackSet", "segment_distance", "load_csv", "save_csv", "KachanovAccuracyWarning",
+           "TOUCH_RTOL", "KACHANOV_GAP_RATIO"]
 
 CSV_COLUMNS = ("x", "y", "half_length", "angle")
+
+#: Two cracks *touch* when their segment distance is at most ``TOUCH_RTOL * min(a_i, a_j)``
+#: plus the rounding of the tip coordinates (``64 eps`` times their magnitude).  A T-junction
+#: built from exact data leaves a distance of ~5e-17 a after rounding; a physical gap of 1e-9 a
+#: is already far inside the range where no crack-interaction model is meaningful.
+TOUCH_RTOL = 1e-9
+
+#: Kachanov's method is inaccurate for close pairs: for two collinear cracks its mean opening is
+#: 0.7 % too large at a gap of 0.5 a, 2.7 % at 0.1 a, 3.7 % at 0.05 a against the exact
+#: solution, and its W* of random sets is up to 5 % low (benchmarks/RESULTS_kachanov.md,
+#: sections 2 and 5).  Pairs closer than ``KACHANOV_GAP_RATIO * min(a_i, a_j)`` get a warning.
+KACHANOV_GAP_RATIO = 0.1
+
+
+class KachanovAccuracyWarning(UserWarning):
+    """Some cracks are so close that Kachanov's approximation errs by a few per cent or more."""
 
 
 def segment_distance(p0, p1, q0, q1):
@@ -121,12 +138,17 @@ class CrackSet:
         object.__setattr__(self, "centres", c)
         object.__setattr__(self, "half_lengths", a)
         object.__setattr__(self, "angles", ang)
-        pairs = self.neighbour_pairs(0.0)
+        p0, p1 = self.tips
+        rounding = 64 * np.finfo(float).eps * float(np.abs(np.vstack([p0, p1])).max())
+        pairs, gaps = self.close_pairs(TOUCH_RTOL, atol=rounding)
         if pairs.size:
             i, j = pairs[0]
             raise InputError(
-                f"cracks must not intersect or touch; cracks {i} (centre {tuple(c[i])}) and "
-                f"{j} (centre {tuple(c[j])}) meet. Move or shorten one of them"
+                f"cracks must not intersect or touch; cracks {i + 1} (centre ({c[i, 0]:.6g}, "
+                f"{c[i, 1]:.6g})) and {j + 1} (centre ({c[j, 0]:.6g}, {c[j, 1]:.6g})) meet "
+                f"(distance {gaps[0]:.3g}, at most "
+                f"{TOUCH_RTOL:g} of the shorter half-length plus rounding). Move or shorten one "
+                "of them"
             )
 
     # ------------------------------------------------------------------ geometry
@@ -197,6 +219,48 @@ class CrackSet:
         out = cand[d <= distance]
         out = np.sort(out, axis=1)
         return out[np.lexsort((out[:, 1], out[:, 0]))] if out.size else out
+
+    def close_pairs(self, gap_ratio: float, atol: float = 0.0):
+        """Pairs closer than ``gap_ratio * min(a_i, a_j) + atol`` and their distances.
+
+        Returns
+        -------
+        pairs : ndarray of int, shape (P, 2)
+            ``i < j`` (0-based), sorted.
+        distances : ndarray, shape (P,)
+            Segment distances [length].
+        """
+        a = self.half_lengths
+        pairs = self.neighbour_pairs(gap_ratio * float(a.max()) + atol)
+        if pairs.size == 0:
+            return pairs, np.zeros(0)
+        i, j = pairs[:, 0], pairs[:, 1]
+        p0, p1 = self.tips
+        d = segment_distance(p0[i], p1[i], p0[j], p1[j])
+        keep = d <= gap_ratio * np.minimum(a[i], a[j]) + atol
+        return pairs[keep], d[keep]
+
+    def warn_if_close(self, gap_ratio: float = KACHANOV_GAP_RATIO, stacklevel: int = 2) -> int:
+        """Warn (:class:`KachanovAccuracyWarning`) when pairs are closer than ``gap_ratio a``.
+
+        Returns the number of such pairs.
+        """
+        import warnings
+
+        pairs, d = self.close_pairs(gap_ratio)
+        if pairs.size:
+            k = int(np.argmin(d / np.minimum(self.half_lengths[pairs[:, 0]],
+                                             self.half_lengths[pairs[:, 1]])))
+            i, j = pairs[k]
+            warnings.warn(
+                f"{len(pairs)} crack pair(s) are closer than {gap_ratio:g} of the shorter "
+                f"half-length (closest: cracks {i + 1} and {j + 1}, distance {d[k]:.3g}); "
+                "Kachanov's approximation errs by several per cent there (2.7 % in the opening "
+                "of two collinear cracks at 0.1 a, benchmarks/RESULTS_kachanov.md): use the BEM "
+                "model (cn.bem_model) or sample with a larger min_spacing",
+                KachanovAccuracyWarning, stacklevel=stacklevel,
+            )
+        return int(len(pairs))
 
     def distances(self) -> np.ndarray:
         """All pairwise segment distances, shape (N, N) (``inf`` on the diagonal)."""
@@ -292,25 +356,47 @@ def load_csv(path) -> CrackSet:
     The file needs a header with the columns ``x, y, half_length`` and either ``angle``
     (radians) or ``angle_deg`` (degrees), in any order; other columns are ignored.
     """
+    # messages name the failing position and what was expected, never the file's content
+    # (a scene's `file` key may point at any readable file)
     path = os.fspath(path)
-    if not os.path.exists(path):
-        raise InputError(f"crack file {path!r} does not exist")
-    with open(path, encoding="utf-8") as fh:
-        header = [h.strip().lower() for h in fh.readline().strip().split(",")]
+    if not os.path.isfile(path):
+        raise InputError(f"crack file {path!r} does not exist or is not a file")
+    try:
+        with open(path, encoding="utf-8") as fh:
+            lines = fh.read().splitlines()
+    except (UnicodeDecodeError, OSError):
+        raise InputError(f"crack file {path!r} is not a readable UTF-8 text file") from None
+    header = [h.strip().lower() for h in (lines[0] if lines else "").split(",")]
     missing = [c for c in ("x", "y", "half_length") if c not in header]
     if missing or not ({"angle", "angle_deg"} & set(header)):
+        need = missing + ([] if {"angle", "angle_deg"} & set(header) else ["angle or angle_deg"])
         raise InputError(
-            f"crack file {path!r} must have a header with columns x, y, half_length and angle "
-            f"(radians) or angle_deg; got {header}"
+            f"crack file {path!r}: line 1 must have a header with columns x, y, half_length and "
+            f"angle (radians) or angle_deg; missing: {', '.join(need)}"
         )
-    try:
-        data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
-    except ValueError as exc:
-        raise InputError(f"crack file {path!r} has a non-numeric entry: {exc}") from exc
-    if data.shape[1] != len(header):
-        raise ShapeError(
-            f"crack file {path!r}: {data.shape[1]} columns per row but {len(header)} in the header"
-        )
+    rows = []
+    for r, line in enumerate(lines[1:], start=2):
+        if not line.strip():
+            continue
+        cells = line.split(",")
+        if len(cells) != len(header):
+            raise ShapeError(f"crack file {path!r}: line {r} has {len(cells)} columns but the "
+                             f"header has {len(header)}")
+        try:
+            rows.append([float(x) for x in cells])
+        except ValueError:
+            col = next(k for k, x in enumerate(cells) if not _is_float(x))
+            raise InputError(f"crack file {path!r}: line {r}, column {col + 1} "
+                             f"({header[col]!r}) is non-numeric") from None
+    data = np.array(rows, dtype=float).reshape(-1, len(header))
     col = {h: data[:, k] for k, h in enumerate(header)}
     angle = col["angle"] if "angle" in col else np.deg2rad(col["angle_deg"])
     return CrackSet(np.column_stack([col["x"], col["y"]]), col["half_length"], angle)
+
+
+def _is_float(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True

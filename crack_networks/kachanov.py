@@ -60,6 +60,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from shakedown.model import citations
 from shakedown.model.errors import InputError
 
 from .bem import elliptic_transmission_factors
@@ -79,10 +80,19 @@ __all__ = [
     "KachanovModel",
     "far_field_tractions",
     "kachanov_model",
+    "kachanov_stiffness",
     "transmission_factors",
 ]
 
 _WEIGHTINGS = ("uniform", "elliptic")
+#: Crack pairs per vectorised block of the closed-form averages.  A pair needs about 1 kB of
+#: complex temporaries in :func:`.fields.segment_average_traction`, so a block's working memory
+#: is about 32 MB whatever the number of cracks (the previous 2e5 pairs took ~200 MB).
+BLOCK_PAIRS = 32_768
+
+
+def _rows_per_block(n: int, chunk_size: int | None) -> int:
+    return int(chunk_size) if chunk_size else max(1, BLOCK_PAIRS // max(n, 1))
 
 
 def transmission_factors(cracks: CrackSet, *, chunk_size: int | None = None) -> np.ndarray:
@@ -92,7 +102,8 @@ def transmission_factors(cracks: CrackSet, *, chunk_size: int | None = None) -> 
     ----------
     cracks : CrackSet
     chunk_size : int, optional
-        Target rows per vectorised block (default keeps blocks near 2e5 pairs).
+        Rows per vectorised block (default: :data:`BLOCK_PAIRS` pairs per block, so that the
+        working memory beyond the (N, N, 2, 2) result is bounded for any N).
 
     Returns
     -------
@@ -105,7 +116,7 @@ def transmission_factors(cracks: CrackSet, *, chunk_size: int | None = None) -> 
     cracks = _check_cracks(cracks)
     n = cracks.n_cracks
     c, a, al = cracks.centres, cracks.half_lengths, cracks.angles
-    rows = chunk_size or max(1, 200_000 // n)
+    rows = _rows_per_block(n, chunk_size)
     out = np.zeros((n, n, 2, 2))
     with np.errstate(all="ignore"):
         for i0 in range(0, n, rows):
@@ -134,15 +145,96 @@ class KachanovModel(CrackNetworkModel):
     weighting: str = "uniform"
 
 
-def stiffness_from_factors(Lam, half_lengths, shear_modulus, poisson_ratio) -> np.ndarray:
-    """``K`` (2N, 2N) from transmission factors: ``K_ii = k0 I``, ``K_ij = -k0 a_i/a_j Lam_ij``."""
+def stiffness_from_factors(Lam, half_lengths, shear_modulus, poisson_ratio, *,
+                           chunk_size: int | None = None) -> np.ndarray:
+    """``K`` (2N, 2N) from transmission factors: ``K_ii = k0 I``, ``K_ij = -k0 a_i/a_j Lam_ij``.
+
+    Written into the result block of rows by block of rows, with no (N, N, 2, 2) temporary.
+    """
     n = Lam.shape[0]
     a = np.asarray(half_lengths, float)
     k0 = 4.0 * shear_modulus / (np.pi * (1.0 - poisson_ratio))
-    K4 = -k0 * (a[:, None] / a[None, :])[:, :, None, None] * Lam  # (i, j, r, d)
+    K = np.empty((2 * n, 2 * n))
+    K4 = K.reshape(n, 2, n, 2)  # a view: (i, r, j, d)
+    rows = _rows_per_block(n, chunk_size)
+    for i0 in range(0, n, rows):
+        i1 = min(n, i0 + rows)
+        blk = Lam[i0:i1].transpose(0, 2, 1, 3)  # (i, r, j, d)
+        np.multiply(blk, (-k0 * (a[i0:i1, None] / a[None, :]))[:, None, :, None],
+                    out=K4[i0:i1])  # the same products as before: bit-identical K
     idx = np.arange(n)
-    K4[idx, idx] = k0 * np.eye(2)
-    return np.ascontiguousarray(K4.transpose(0, 2, 1, 3)).reshape(2 * n, 2 * n)
+    K4[idx, :, idx, :] = k0 * np.eye(2)
+    return K
+
+
+def _near_pairs(cracks: CrackSet, radius: float):
+    """Ordered pairs ``(i, j)``, ``i != j``, whose centres are closer than ``radius`` times
+    ``a_i + a_j`` (a k-d tree: O(N log N + pairs))."""
+    from scipy.spatial import cKDTree
+
+    c, a = cracks.centres, cracks.half_lengths
+    tree = cKDTree(c)
+    pairs = tree.query_pairs(float(radius) * 2.0 * float(a.max()), output_type="ndarray")
+    if pairs.size:
+        d = np.linalg.norm(c[pairs[:, 0]] - c[pairs[:, 1]], axis=1)
+        pairs = pairs[d < radius * (a[pairs[:, 0]] + a[pairs[:, 1]])]
+    return np.concatenate([pairs, pairs[:, ::-1]]) if pairs.size else np.zeros((0, 2), int)
+
+
+def kachanov_stiffness(cracks: CrackSet, shear_modulus: float = 1.0,
+                       poisson_ratio: float = 0.25, *, interaction_radius: float | None = None,
+                       chunk_size: int | None = None):
+    """Kachanov's raw stiffness ``K`` (2N, 2N), full or truncated.
+
+    Parameters
+    ----------
+    cracks : CrackSet
+    shear_modulus : float
+        ``mu`` [stress].
+    poisson_ratio : float
+    interaction_radius : float, optional
+        Keep only the interactions of pairs whose centre distance is below
+        ``interaction_radius * (a_i + a_j)`` (dimensionless; the transmission factors decay
+        as ``(a / distance)^2``); the result is then a ``scipy.sparse.csr_matrix`` assembled
+        pair by pair, in O(N + pairs) time and memory, never densified.  The error against
+        the full matrix is measured in ``benchmarks/RESULTS_kachanov_assembly.md``.  Default:
+        the full dense matrix, assembled in blocks of rows.
+    chunk_size : int, optional
+        Rows (dense) per block.
+
+    Returns
+    -------
+    ndarray or scipy.sparse.csr_matrix, shape (2N, 2N)
+        Rows and columns ordered ``(w_1, v_1, w_2, v_2, ...)`` as :func:`stiffness_from_factors`.
+    """
+    cracks = _check_cracks(cracks)
+    mu, nu = _check_material(shear_modulus, poisson_ratio)
+    if interaction_radius is None:
+        return stiffness_from_factors(transmission_factors(cracks, chunk_size=chunk_size),
+                                      cracks.half_lengths, mu, nu, chunk_size=chunk_size)
+    r = float(interaction_radius)
+    if not (np.isfinite(r) and r > 0):
+        raise InputError(f"interaction_radius must be a positive number of crack lengths "
+                         f"(e.g. 5); got {interaction_radius!r}")
+    import scipy.sparse as sp
+
+    n = cracks.n_cracks
+    c, a, al = cracks.centres, cracks.half_lengths, cracks.angles
+    k0 = 4.0 * mu / (np.pi * (1.0 - nu))
+    pairs = _near_pairs(cracks, r)
+    vals = np.empty((len(pairs), 2, 2))
+    with np.errstate(all="ignore"):
+        for p0 in range(0, len(pairs), BLOCK_PAIRS):
+            i, j = pairs[p0:p0 + BLOCK_PAIRS, 0], pairs[p0:p0 + BLOCK_PAIRS, 1]
+            vals[p0:p0 + BLOCK_PAIRS] = segment_average_traction(c[j], a[j], al[j], c[i], a[i],
+                                                                 al[i])
+    i, j = pairs[:, 0], pairs[:, 1]
+    vals *= (-k0 * (a[i] / a[j]))[:, None, None]
+    r_, d_ = np.meshgrid([0, 1], [0, 1], indexing="ij")
+    rows = np.concatenate([(2 * i[:, None, None] + r_).ravel(), np.arange(2 * n)])
+    cols = np.concatenate([(2 * j[:, None, None] + d_).ravel(), np.arange(2 * n)])
+    data = np.concatenate([vals.ravel(), np.full(2 * n, k0)])
+    return sp.csr_matrix((data, (rows, cols)), shape=(2 * n, 2 * n))
 
 
 def kachanov_model(
@@ -154,6 +246,7 @@ def kachanov_model(
     symmetric: bool = True,
     weighting: str = "uniform",
     validate: bool = True,
+    interaction_radius: float | None = None,
 ) -> KachanovModel:
     """Build Kachanov's discrete model of a crack network.
 
@@ -176,6 +269,11 @@ def kachanov_model(
     validate : bool
         Build :attr:`~CrackNetworkModel.system` now, so that an indefinite ``K`` or bad
         friction raises here.
+    interaction_radius : float, optional
+        Truncate the interactions to pairs closer than ``interaction_radius * (a_i + a_j)``
+        (:func:`kachanov_stiffness`; uniform weighting only).  The model's ``K`` is then the
+        truncated matrix made dense (a :class:`shakedown.DiscreteSystem` is dense) and
+        :attr:`KachanovModel.transmission_factors` is None.
 
     Returns
     -------
@@ -189,17 +287,25 @@ def kachanov_model(
     >>> m.transmission_factors.shape
     (2, 2, 2, 2)
     """
+    citations.register("kachanov1987")
     cracks = _check_cracks(cracks)
     mu, nu = _check_material(shear_modulus, poisson_ratio)
     if weighting not in _WEIGHTINGS:
         raise InputError(f"weighting must be one of {_WEIGHTINGS}; got {weighting!r}")
-    if weighting == "uniform":
-        Lam = transmission_factors(cracks)
+    if interaction_radius is not None:
+        if weighting != "uniform":
+            raise InputError("interaction_radius works with weighting='uniform' only; remove "
+                             "one of them")
+        Lam = None
+        K = kachanov_stiffness(cracks, mu, nu, interaction_radius=interaction_radius).toarray()
     else:
-        Lam = elliptic_transmission_factors(cracks)
-    K = stiffness_from_factors(Lam, cracks.half_lengths, mu, nu)
+        if weighting == "uniform":
+            Lam = transmission_factors(cracks)
+        else:
+            Lam = elliptic_transmission_factors(cracks)
+        K = stiffness_from_factors(Lam, cracks.half_lengths, mu, nu)
+        Lam.setflags(write=False)
     K.setflags(write=False)
-    Lam.setflags(write=False)
     model = KachanovModel(
         cracks=cracks, shear_modulus=mu, poisson_ratio=nu, friction=friction,
         symmetric=bool(symmetric), stiffness_raw=K, transmission_factors=Lam,
@@ -207,4 +313,5 @@ def kachanov_model(
     )
     if validate:
         model.system  # noqa: B018  (raises on indefinite K or bad friction)
+    cracks.warn_if_close(stacklevel=3)  # Kachanov's error is large for close pairs
     return model

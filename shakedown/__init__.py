@@ -12,17 +12,18 @@ from importlib import import_module as _import_module
 
 from .model.errors import (
     InputError,
+    MissingDependencyError,
     NotPositiveDefiniteError,
     NotSymmetricError,
     SceneError,
     ShakedownError,
     ShapeError,
     SolverError,
+    UnsafePathError,
 )
 from .model.loading import LoadCycle
 from .model.system import CriticalFriction, DiscreteSystem
-
-__version__ = "0.1.0"
+from .model.version import __version__ as __version__
 
 # analyses are imported lazily so that `import shakedown` stays light
 _LAZY = {
@@ -48,6 +49,7 @@ _LAZY = {
     "scenes": None,
     "gallery": None,
     "sweep": "studies.sweep",
+    "half_plane_model": "models.half_plane",
 }
 
 #: Modules that moved in the stage layout (0.2), by their old name: ``import shakedown.sweep``
@@ -114,11 +116,13 @@ __all__ = [
     "CriticalFriction",
     "LoadCycle",
     "InputError",
+    "MissingDependencyError",
     "ShapeError",
     "NotSymmetricError",
     "NotPositiveDefiniteError",
     "SceneError",
     "ShakedownError",
     "SolverError",
+    "UnsafePathError",
     *_LAZY,
 ]

@@ -29,6 +29,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 
+from ..model import citations
+
 #: Feasibility tolerance, relative to the row scale ``|a_i| (1 + |x|) + |b_i|``.
 FEAS_TOL = 1e-9
 #: Smallest pivot ``|alpha_r|`` accepted in the ratio test (rows are scaled to unit norm).
@@ -202,6 +204,7 @@ def complete_basis(A, z, s, e, n, max_missing=None):
         _, _, piv = sla.qr(P.T, mode="economic", pivoting=True)
         chosen = rest[piv[:k]]
     else:
+        citations.register("huangfu2018")  # scipy linprog(method="highs")
         res = linprog(np.ones(len(rest)), A_eq=P.T, b_eq=target, bounds=(0, None),
                       method="highs")
         if res.status != 0:

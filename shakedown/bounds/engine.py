@@ -35,6 +35,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..model import citations
 from ..model.errors import InputError, ShapeError
 from ..model.loading import LoadCycle
 from ..model.system import DiscreteSystem
@@ -326,6 +327,12 @@ class ShakedownBounds:
             "n_nodes": int(self.n_nodes),
         }
 
+    def verdict(self) -> str:
+        """The answer in plain sentences, numbers rounded for reading (:mod:`.verdict`)."""
+        from .verdict import bounds_verdict
+
+        return bounds_verdict(self)
+
     def summary(self) -> str:
         """A readable multi-line summary."""
         d = self.to_dict()
@@ -347,6 +354,7 @@ class ShakedownBounds:
 # ---------------------------------------------------------------------- engine
 def safe_region(system: DiscreteSystem, load: LoadCycle, lam: float) -> SafeRegion:
     """The safe shakedown region ``H(lam)`` as a polyhedron ``normals @ v <= offsets``."""
+    citations.register("melan1936", "klarbring2007")
     lam = _check_lam(lam)
     cs = extreme_constraints(system, load)
     return SafeRegion(
@@ -470,6 +478,7 @@ def shakedown_bounds(
     >>> round(b.lam1, 12), round(b.lam2, 12)
     (1.0, 1.0)
     """
+    citations.register("melan1936", "klarbring2007", "ahn2008")
     t0 = time.perf_counter()
     cs = extreme_constraints(system, load)
     if solver not in ("auto", "highs"):

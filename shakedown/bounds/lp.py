@@ -15,6 +15,8 @@ import highspy
 import numpy as np
 import scipy.sparse as sp
 
+from ..model import citations
+
 INF = highspy.kHighsInf
 
 
@@ -86,6 +88,7 @@ class ReusableLP:
         self.sense = "max"
         self.n_solves = 0
         self.total_iterations = 0
+        citations.register("huangfu2018")
         h = highspy.Highs()
         h.setOptionValue("output_flag", False)
         h.setOptionValue("presolve", "off")  # keep the basis between solves

@@ -13,172 +13,19 @@ largest change of a reaction a node's own stiffness would produce, relative to t
 
 from __future__ import annotations
 
-import time
-from dataclasses import dataclass, field
-
 import numpy as np
 
 from ..model.errors import InputError
 from ..model.loading import LoadCycle
 from ..model.system import DiscreteSystem
-from ..model.validation import check_load_factor, check_same_nodes
+from ..model.validation import check_count, check_load_factor, check_same_nodes
 from .complementarity import (
     FEAS_TOL,
-    SEPARATED,
-    STATE_NAMES,
-    STICK,
     StepSolver,
     _vec,
 )
-from .events import CycleRecord, EventIntegrator
-
-#: A node *slips* in the steady orbit when its total slip while in contact exceeds
-#: ``SHAKEDOWN_FACTOR * tol * F / A_jj``.  An orbit approached geometrically is accepted once a
-#: period changes the state by ``<= tol``; its remaining slip is a few times that (forward and
-#: backward slips that cancel), hence the factor 10.
-SHAKEDOWN_FACTOR = 10.0
-
-
-@dataclass(frozen=True)
-class EnergyIdentity:
-    """``W`` against the closed integral of ``u . d r_w`` over the steady orbit.
-
-    Attributes
-    ----------
-    dissipation : float
-        ``W`` of the steady orbit (summed over its ``period`` load periods) [energy].
-    closed_integral : float
-        ``sum_k (u_{k-1} + u_k) / 2 . (r_w,k - r_w,k-1)`` over the orbit's points (exact for
-        the event-driven path, whose ``u`` and ``r_w`` are affine between points; for implicit
-        steps a trapezoidal estimate whose difference from ``W`` is the O(1/steps) error of the
-        backward-Euler path).
-    difference : float
-        ``dissipation - closed_integral``.
-    relative_difference : float
-        ``|difference| / max(|W|, |integral|, F^2 sum_j 1 / A_jj * tol)`` (dimensionless).
-    numerical_dissipation : float
-        Energy lost by the time discretisation itself (0 for the event-driven path).  For
-        implicit (backward-Euler) steps the exact discrete balance is, with ``r = r_w + K u``
-        and ``p_k w_k = 0``,
-
-            W = sum_k u_{k-1} . (r_w,k - r_w,k-1) - sum_k [ (u_k - u_{k-1})^T K (u_k - u_{k-1}) / 2
-                + p_k . w_{k-1} ] - [u . r_w + u^T K u / 2]_start^end
-
-        (the last bracket vanishes on a periodic orbit).  This is the sum in brackets: the
-        ``O(1/steps)`` gap between ``W`` and the continuous closed integral.
-    discrete_difference : float
-        ``W`` minus the right-hand side of that balance: zero to solver tolerance for every
-        step count (for the event path it equals ``difference``).
-    discrete_relative_difference : float
-        The same, scaled like ``relative_difference``.
-    """
-
-    dissipation: float
-    closed_integral: float
-    difference: float
-    relative_difference: float
-    numerical_dissipation: float = 0.0
-    discrete_difference: float = float("nan")
-    discrete_relative_difference: float = float("nan")
-
-
-@dataclass(frozen=True, eq=False)
-class CycleRun:
-    """Result of :func:`solve_cycles`.
-
-    Attributes
-    ----------
-    dissipation : ndarray, shape (n_cycles,)
-        ``W`` of every simulated period [energy]: implicit, ``sum_k -q_k . (v_k - v_{k-1})``
-        with the end-of-step ``q``; events, ``sum f_j p_j |dv_j|`` integrated exactly.  The
-        work of bringing the initial state to equilibrium (events: a jump at ``t = 0``) is in
-        period 1.
-    steady_dissipation : float
-        ``W`` per load period of the steady orbit (mean over its ``period`` periods, without
-        the initial jump of the events method); nan if none.
-    shook_down : bool
-        A steady orbit was reached in which no node slips: the total slip of node ``j`` while in
-        contact over the orbit is at most ``SHAKEDOWN_FACTOR * tol * F / A_jj``.
-    period : int
-        1 or 2 (load periods) or 0 (no steady orbit within ``max_cycles``).
-    stuck_nodes : ndarray of int
-        Nodes in contact throughout the steady orbit that never slip (same test as
-        ``shook_down``):
-        the permanently stuck set ``S0``; empty if no steady orbit.
-    n_cycles : int
-        Simulated periods.
-    cycles_to_steady : int
-        Periods simulated before the steady orbit began (``n_cycles - period``); -1 if none.
-    state_change : ndarray, shape (n_cycles,)
-        Change of state over each period (see the module docstring); period 1 is detected when
-        it is ``<= tol``, period 2 when the change over two periods is.
-    final_slip, final_gap : ndarray, shape (N,)
-        State at the end of the last simulated period.
-    cycle_start_slips, cycle_start_gaps : ndarray, shape (n_cycles + 1, N)
-        State at ``t = 0, 1, ..., n_cycles`` (row 0: the initial state; events: after the
-        equilibrium jump at ``t = 0``).
-    steady_table : pandas.DataFrame
-        The steady orbit's time series, one row per (time, node): ``cycle``, ``t`` (absolute,
-        cycles), ``node``, ``slip``, ``gap``, ``q``, ``p``, ``state`` (:data:`STATE_NAMES`, of the
-        step / segment ending at ``t``); the first row of each node is the orbit's start.  If no
-        steady orbit was reached, the last simulated period (``steady`` attribute False).
-    energy_identity : EnergyIdentity or None
-        Over the steady orbit (None if none).
-    status : str
-        ``"periodic"``, ``"not_converged"`` (no steady orbit within ``max_cycles``) or
-        ``"step_failed"`` (a step / rate problem had no verified solution; the run stopped).
-    message : str
-        Human-readable summary, including non-unique steps (friction above critical) if any.
-    max_residual : float
-        Largest complementarity residual of any step (dimensionless, see ``StepResult``).
-    step_statuses : dict
-        Count of steps per ``StepResult.status`` (implicit; events: the initial projection).
-    statistics : dict
-        ``n_steps`` (implicit steps, or event segments), ``n_events`` (segments), ``rate_solves``,
-        ``active_set_iterations``,
-        ``factorizations``, ``low_rank_updates``, ``cache_hits``, ``lemke_calls``,
-        ``enumerations``, ``wall_time`` [s].
-    method, steps_per_cycle, lam, tol, force_scale :
-        The run's settings; ``load`` is the load actually simulated (events with a harmonic
-        load: its ``to_samples(steps_per_cycle)`` interpolant).
-    final_active_sets : ndarray or None
-        Implicit: the state assignments of the last period's steps, shape (steps, N).
-    history : pandas.DataFrame or None
-        All periods' time series (``record_history=True``), same columns as ``steady_table``.
-    """
-
-    dissipation: np.ndarray
-    steady_dissipation: float
-    shook_down: bool
-    period: int
-    stuck_nodes: np.ndarray
-    n_cycles: int
-    cycles_to_steady: int
-    state_change: np.ndarray
-    final_slip: np.ndarray
-    final_gap: np.ndarray
-    cycle_start_slips: np.ndarray
-    cycle_start_gaps: np.ndarray
-    steady_table: object
-    energy_identity: EnergyIdentity | None
-    status: str
-    message: str
-    max_residual: float
-    step_statuses: dict
-    statistics: dict
-    method: str
-    steps_per_cycle: int
-    lam: float
-    tol: float
-    force_scale: float
-    load: LoadCycle = field(repr=False)
-    final_active_sets: np.ndarray | None = field(default=None, repr=False)
-    history: object = field(default=None, repr=False)
-
-    @property
-    def success(self) -> bool:
-        """A steady orbit was reached."""
-        return self.status == "periodic"
+from .cycle_results import SHAKEDOWN_FACTOR, CycleRun, EnergyIdentity
+from .multistate import run_states
 
 
 def _check_inputs(system, load, lam, initial_slip, initial_gap, method, steps_per_cycle,
@@ -192,20 +39,36 @@ def _check_inputs(system, load, lam, initial_slip, initial_gap, method, steps_pe
     lam = check_load_factor(lam)
     if method not in ("implicit", "events"):
         raise InputError(f"method must be 'implicit' or 'events'; got {method!r}")
-    if isinstance(steps_per_cycle, bool) or int(steps_per_cycle) != steps_per_cycle \
-            or steps_per_cycle < 2:
-        raise InputError(f"steps_per_cycle must be an integer >= 2; got {steps_per_cycle!r}")
-    if isinstance(max_cycles, bool) or int(max_cycles) != max_cycles or max_cycles < 1:
-        raise InputError(f"max_cycles must be an integer >= 1; got {max_cycles!r}")
+    steps_per_cycle = check_count("steps_per_cycle", steps_per_cycle, 2)
+    max_cycles = check_count("max_cycles", max_cycles, 1)
     try:
         tol = float(tol)
     except (TypeError, ValueError) as exc:
         raise InputError(f"tol must be a positive number; got {tol!r}") from exc
     if not (np.isfinite(tol) and tol > 0):
         raise InputError(f"tol must be a positive number (e.g. 1e-10); got {tol}")
-    v0 = np.zeros(n) if initial_slip is None else _vec("initial_slip", initial_slip, n)
-    w0 = np.zeros(n) if initial_gap is None else _vec("initial_gap", initial_gap, n, nonneg=True)
-    return lam, v0, w0, int(steps_per_cycle), int(max_cycles), tol
+    batch = initial_slip is not None and np.ndim(initial_slip) == 2
+    if batch:
+        rows = list(initial_slip)
+        if not rows:
+            raise InputError("initial_slip with shape (n_states, N) needs n_states >= 1; "
+                             "got 0 rows")
+        V0 = np.array([_vec(f"initial_slip[{i}]", v, n) for i, v in enumerate(rows)])
+    else:
+        V0 = (np.zeros(n) if initial_slip is None else _vec("initial_slip", initial_slip, n))
+        V0 = V0[None, :]
+    k = V0.shape[0]
+    if initial_gap is None or np.ndim(initial_gap) == 1:
+        w0 = (np.zeros(n) if initial_gap is None
+              else _vec("initial_gap", initial_gap, n, nonneg=True))
+        W0 = np.repeat(w0[None, :], k, axis=0)
+    elif batch and np.shape(initial_gap) == (k, n):
+        W0 = np.array([_vec(f"initial_gap[{i}]", g, n, nonneg=True)
+                       for i, g in enumerate(initial_gap)])
+    else:
+        raise InputError(f"initial_gap must have shape ({n},) or, with initial_slip of shape "
+                         f"({k}, {n}), ({k}, {n}); got {np.shape(initial_gap)}")
+    return lam, V0, W0, int(steps_per_cycle), int(max_cycles), tol, batch
 
 
 def _state_change(D, F, v1, w1, v0, w0):
@@ -226,9 +89,13 @@ def solve_cycles(system: DiscreteSystem, load: LoadCycle, lam: float, initial_sl
     load : LoadCycle
     lam : float
         Load factor (``>= 0``).
-    initial_slip : array_like, shape (N,), optional
-        Slips at ``t = 0`` (zeros by default) [length].
-    initial_gap : array_like, shape (N,), optional
+    initial_slip : array_like, shape (N,) or (n_states, N), optional
+        Slips at ``t = 0`` (zeros by default) [length].  With shape (n_states, N) the states
+        are run together (:mod:`shakedown.evolution.multistate`: one solver, one factor
+        cache, states sharing an active set solved by one multi-right-hand-side solve) and a
+        list of ``n_states`` CycleRun is returned; each equals an independent run to the
+        solver tolerance.
+    initial_gap : array_like, shape (N,) or (n_states, N), optional
         Gaps at ``t = 0`` (zeros by default, ``>= 0``).  The step problem does not depend on the
         previous gap: it only seeds which nodes start separated.
     method : {"implicit", "events"}
@@ -257,7 +124,7 @@ def solve_cycles(system: DiscreteSystem, load: LoadCycle, lam: float, initial_sl
 
     Returns
     -------
-    CycleRun
+    CycleRun, or list of CycleRun for a 2-D ``initial_slip``
 
     Examples
     --------
@@ -268,246 +135,15 @@ def solve_cycles(system: DiscreteSystem, load: LoadCycle, lam: float, initial_sl
     >>> run.period, round(run.steady_dissipation, 12)   # 4 f P (lam Q1 - f P) / k
     (1, 1.0)
     """
-    lam, v0, w0, n_steps, max_cycles, tol = _check_inputs(
+    lam, V0, W0, n_steps, max_cycles, tol, batch = _check_inputs(
         system, load, lam, initial_slip, initial_gap, method, steps_per_cycle, max_cycles, tol)
     if solver is None:
         solver = StepSolver(system) if feas_tol is None else StepSolver(system, feas_tol=feas_tol)
     elif solver.system is not system:
         raise InputError("solver was built for another system; pass solver=None")
-    t_start = time.perf_counter()
-    totals0 = dict(solver.totals)
-    note = ""
-    if method == "events" and load.kind != "samples":
-        load = load.to_samples(n_steps)
-        note = (f"harmonic load replaced by its piecewise-linear interpolant through "
-                f"{n_steps} samples (load.to_samples); ")
-    grid = (np.arange(1, n_steps + 1) / n_steps if method == "implicit"
-            else np.arange(load.n_samples) / load.n_samples)
-    qg, pg = load.evaluate(grid, lam)
-    F = float(max(np.abs(qg).max(), np.abs(pg).max()))
-    F = F if F > 0 else 1.0
-    D = solver.diag
-    dtol = solver.feas_tol * F / D
-
-    step_statuses: dict[str, int] = {}
-    max_res = 0.0
-    ok, fail_msg = True, ""
-    v, w = v0.copy(), w0.copy()
-    prev_states = np.where(w0 > 0, SEPARATED, STICK).astype(np.int8)
-    guess = prev_states.copy()
-    W_jump = 0.0
-    integrator = None
-    if method == "events":
-        integrator = EventIntegrator(solver, load, lam, F)
-        q_w0, p_w0 = load.evaluate(0.0, lam)
-        r = solver.solve(v, q_w0, p_w0, guess)
-        step_statuses[r.status] = step_statuses.get(r.status, 0) + 1
-        max_res = r.residual
-        if not r.success:
-            ok, fail_msg = False, f"no verified equilibrium at t = 0: {r.message}"
-        else:
-            W_jump = float(-(r.q @ r.slip_increment))
-            v, w, guess = r.slip, r.gap, r.active_set
-    else:
-        qw_steps, pw_steps = qg, pg
-
-    starts_v, starts_w = [v0.copy()], [w0.copy()]
-    if method == "events" and ok:
-        starts_v[0], starts_w[0] = v.copy(), w.copy()
-    W_list, change = [], []
-    records: list[CycleRecord] = []
-    history = [] if record_history else None
-    period = 0
-    c = 0
-    while ok and c < max_cycles:
-        c += 1
-        if method == "implicit":
-            rec = _implicit_cycle(solver, c, v, w, prev_states, guess, qw_steps, pw_steps,
-                                  load, lam, step_statuses)
-        else:
-            rec = integrator.cycle(c, v, w, prev_states, guess)
-        max_res = max(max_res, rec.max_residual)
-        if not rec.ok:
-            ok, fail_msg = False, rec.message
-            break
-        records = (records + [rec])[-2:]
-        if history is not None:
-            history.append(rec)
-        v, w = rec.v[-1].copy(), rec.w[-1].copy()
-        prev_states = rec.states[-1]
-        guess = rec.active_sets[-1] if rec.active_sets.ndim == 2 else rec.active_sets
-        W_list.append(rec.dissipation + (W_jump if c == 1 else 0.0))
-        change.append(_state_change(D, F, v, w, starts_v[-1], starts_w[-1]))
-        starts_v.append(v.copy())
-        starts_w.append(w.copy())
-        if progress is not None:
-            progress(c, max_cycles, rec.dissipation)
-        if change[-1] <= tol:
-            period = 1
-            break
-        if c >= 2 and _state_change(D, F, v, w, starts_v[-3], starts_w[-3]) <= tol:
-            period = 2
-            break
-
-    return _finish(system, solver, load, lam, method, n_steps, tol, F, dtol, records, history,
-                   period, W_list, change, starts_v, starts_w, v, w, ok, fail_msg, note,
-                   step_statuses, max_res, totals0, t_start, integrator, max_cycles)
+    runs = run_states(system, solver, load, lam, V0, W0, method, n_steps, max_cycles, tol,
+                      progress=progress, record_history=record_history)
+    return runs if batch else runs[0]
 
 
-def _implicit_cycle(solver, c, v, w, prev_states, guess, qw, pw, load, lam, step_statuses):
-    n_steps, n = qw.shape
-    V = np.empty((n_steps + 1, n))
-    Wg, Q, P = np.empty_like(V), np.empty_like(V), np.empty_like(V)
-    st = np.empty((n_steps + 1, n), np.int8)
-    act = np.empty((n_steps, n), np.int8)
-    q0w, p0w = load.evaluate(0.0, lam)
-    V[0], Wg[0] = v, w
-    Q[0], P[0] = q0w + solver.A @ v + solver.B @ w, p0w + solver.Bt @ v + solver.C @ w
-    st[0] = prev_states
-    W = 0.0
-    worst = 0.0
-    for k in range(n_steps):
-        r = solver.solve(v, qw[k], pw[k], guess)
-        step_statuses[r.status] = step_statuses.get(r.status, 0) + 1
-        worst = max(worst, r.residual)
-        if not r.success:
-            rec = CycleRecord(np.zeros(0), V[:k + 1], Wg[:k + 1], Q[:k + 1], P[:k + 1],
-                              st[:k + 1], W, ok=False, max_residual=worst,
-                              message=f"step {k + 1} of period {c} (t = "
-                              f"{c - 1 + (k + 1) / n_steps:.6g}): {r.status}: {r.message}")
-            return rec
-        W -= float(r.q @ r.slip_increment)
-        v, guess = r.slip, r.active_set
-        V[k + 1], Wg[k + 1], Q[k + 1], P[k + 1] = r.slip, r.gap, r.q, r.p
-        st[k + 1] = r.states
-        act[k] = r.active_set
-    t = c - 1 + np.arange(n_steps + 1) / n_steps
-    return CycleRecord(t, V, Wg, Q, P, st, W, active_sets=act, n_steps=n_steps,
-                       max_residual=worst)
-
-
-def _table(records):
-    import pandas as pd
-
-    frames = []
-    for i, rec in enumerate(records):
-        sl = slice(0, None) if i == 0 else slice(1, None)  # the orbit's points, no repeats
-        t = rec.t[sl]
-        K, n = rec.v[sl].shape
-        frames.append(pd.DataFrame({
-            "cycle": np.full(K * n, int(round(rec.t[-1])) if rec.t.size else 0),
-            "t": np.repeat(t, n),
-            "node": np.tile(np.arange(n), K),
-            "slip": rec.v[sl].ravel(),
-            "gap": rec.w[sl].ravel(),
-            "q": rec.q[sl].ravel(),
-            "p": rec.p[sl].ravel(),
-            "state": pd.Categorical.from_codes(rec.states[sl].ravel().astype(int),
-                                               categories=list(STATE_NAMES)),
-        }))
-    return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(
-        columns=["cycle", "t", "node", "slip", "gap", "q", "p", "state"])
-
-
-def _energy(records, load, lam, D, F, tol, K=None, implicit=False):
-    t = np.concatenate([records[0].t] + [r.t[1:] for r in records[1:]])
-    u = np.concatenate([np.hstack([records[0].v, records[0].w])]
-                       + [np.hstack([r.v[1:], r.w[1:]]) for r in records[1:]])
-    qw, pw = load.evaluate(t, lam)
-    rw = np.hstack([qw, pw])
-    du, drw = np.diff(u, axis=0), np.diff(rw, axis=0)
-    integral = float(np.sum(0.5 * (u[1:] + u[:-1]) * drw))
-    W = float(sum(r.dissipation for r in records))
-    n = records[0].v.shape[1]
-    floor = F * F * float(np.sum(1.0 / D[:n])) * tol
-    scale = max(abs(W), abs(integral), floor)
-    rel = abs(W - integral) / scale
-    if not implicit or K is None:
-        return EnergyIdentity(W, integral, W - integral, rel, 0.0, W - integral, rel)
-    # exact backward-Euler balance (see EnergyIdentity): left-point load work, minus the
-    # discretisation losses, minus the boundary terms of a not exactly closed orbit
-    p = np.concatenate([records[0].p] + [r.p[1:] for r in records[1:]])
-    gaps = u[:, n:]
-    losses = 0.5 * float(np.einsum("ki,ij,kj->", du, K, du)) + float(np.sum(p[1:] * gaps[:-1]))
-    left = float(np.sum(u[:-1] * drw))
-    boundary = (float(u[-1] @ rw[-1] + 0.5 * u[-1] @ K @ u[-1])
-                - float(u[0] @ rw[0] + 0.5 * u[0] @ K @ u[0]))
-    ddiff = W - (left - losses - boundary)
-    return EnergyIdentity(W, integral, W - integral, rel, losses, ddiff, abs(ddiff) / scale)
-
-
-def _finish(system, solver, load, lam, method, n_steps, tol, F, dtol, records, history, period,
-            W_list, change, starts_v, starts_w, v, w, ok, fail_msg, note, step_statuses,
-            max_res, totals0, t_start, integrator, max_cycles):
-    n = system.n_nodes
-    n_cycles = len(W_list)
-    orbit = records[-period:] if period else records[-1:]
-    if period:
-        states = np.concatenate([r.states[1:] for r in orbit])
-        V = np.concatenate([orbit[0].v] + [r.v[1:] for r in orbit[1:]])
-        contact = states != SEPARATED
-        # total slip in contact over the orbit, in units of F / A_jj (see the module docstring)
-        travel = np.sum(np.abs(np.diff(V, axis=0)) * contact, axis=0) * solver.diag[:n] / F
-        slipped = travel > SHAKEDOWN_FACTOR * tol
-        stuck = np.flatnonzero(~slipped & np.all(contact, axis=0))
-        steady_W = float(np.mean([r.dissipation for r in orbit]))
-        shook = not bool(np.any(slipped))
-        energy = _energy(orbit, load, lam, solver.diag, F, tol, K=system.K,
-                         implicit=(method == "implicit"))
-        status = "periodic"
-        msg = (f"periodic with period {period} T after {n_cycles} period(s); "
-               + ("shook down" if shook else f"steady W = {steady_W:.6g} per period"))
-    else:
-        stuck, steady_W, shook, energy = np.zeros(0, int), float("nan"), False, None
-        if ok:
-            status = "not_converged"
-            msg = (f"no steady orbit within {max_cycles} period(s); last state change "
-                   f"{change[-1]:.3g} > tol = {tol:g}" if change else "no period simulated")
-        else:
-            status, msg = "step_failed", f"stopped: {fail_msg}"
-    bad = {k: m for k, m in step_statuses.items() if k not in ("unique",)}
-    if bad:
-        msg += "; step statuses " + ", ".join(f"{k}: {m}" for k, m in sorted(bad.items()))
-    tot = {k: solver.totals[k] - totals0.get(k, 0) for k in solver.totals}
-    stats = dict(
-        n_steps=int(integrator.n_events if integrator else tot["steps"]),
-        n_events=int(integrator.n_events) if integrator else 0,
-        rate_solves=int(integrator.rate_solves) if integrator else 0,
-        active_set_iterations=tot["iterations"], factorizations=tot["factorizations"],
-        low_rank_updates=tot["updates"], cache_hits=tot["cache_hits"],
-        lemke_calls=tot["lemke_calls"], enumerations=tot["enumerations"],
-        wall_time=time.perf_counter() - t_start,
-    )
-    final_act = records[-1].active_sets if (records and method == "implicit") else None
-    return CycleRun(
-        dissipation=np.asarray(W_list, float),
-        steady_dissipation=steady_W,
-        shook_down=bool(shook),
-        period=int(period),
-        stuck_nodes=np.asarray(stuck, int),
-        n_cycles=n_cycles,
-        cycles_to_steady=n_cycles - period if period else -1,
-        state_change=np.asarray(change, float),
-        final_slip=np.asarray(v, float).copy(),
-        final_gap=np.asarray(w, float).copy(),
-        cycle_start_slips=np.asarray(starts_v),
-        cycle_start_gaps=np.asarray(starts_w),
-        steady_table=_table(orbit) if orbit else _table([]),
-        energy_identity=energy,
-        status=status,
-        message=note + msg,
-        max_residual=float(max_res),
-        step_statuses=dict(step_statuses),
-        statistics=stats,
-        method=method,
-        steps_per_cycle=n_steps,
-        lam=lam,
-        tol=tol,
-        force_scale=F,
-        load=load,
-        final_active_sets=final_act,
-        history=_table(history) if history else None,
-    )
-
-
-__all__ = ["solve_cycles", "CycleRun", "EnergyIdentity", "FEAS_TOL"]
+__all__ = ["solve_cycles", "CycleRun", "EnergyIdentity", "FEAS_TOL", "SHAKEDOWN_FACTOR"]

@@ -15,6 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..model import citations
+
 
 @dataclass(frozen=True)
 class LemkeResult:
@@ -83,6 +85,7 @@ def lemke(M, q, *, d=None, max_pivots: int | None = None, pivot_tol: float = 1e-
     -------
     LemkeResult
     """
+    citations.register("lemke1965")
     M = np.asarray(M, float)
     q = np.asarray(q, float)
     n = q.shape[0]

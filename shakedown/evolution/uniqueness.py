@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from ..model import citations
 from ..model.errors import InputError, ShapeError
 from .steady import _check_common, natural_slip_scale, sample_initial_slips, steady_cycle
 
@@ -212,6 +213,7 @@ def uniqueness_study(system, load, lam: float, initial_slips=16, *, rng=None,
     -------
     UniquenessStudy
     """
+    citations.register("barber2011")
     n = system.n_nodes
     lam = _check_common(system, load, lam)
     if solver not in ("cycles", "steady"):

@@ -5,12 +5,14 @@ Imports nothing else from :mod:`shakedown`; every other package may import from 
 
 from .errors import (
     InputError,
+    MissingDependencyError,
     NotPositiveDefiniteError,
     NotSymmetricError,
     SceneError,
     ShakedownError,
     ShapeError,
     SolverError,
+    UnsafePathError,
 )
 from .loading import LoadCycle
 from .system import CriticalFriction, DiscreteSystem
@@ -20,10 +22,12 @@ __all__ = [
     "CriticalFriction",
     "LoadCycle",
     "InputError",
+    "MissingDependencyError",
     "NotPositiveDefiniteError",
     "NotSymmetricError",
     "SceneError",
     "ShakedownError",
     "ShapeError",
     "SolverError",
+    "UnsafePathError",
 ]

@@ -32,6 +32,14 @@ class SceneError(InputError):
     """A scene file is invalid: the message names the file, the key, the value and what is allowed."""
 
 
+class MissingDependencyError(ShakedownError, ImportError):
+    """An optional package is not installed; the message names the ``pip install`` command."""
+
+
+class UnsafePathError(InputError):
+    """A name or path would write outside the output folder or through a symbolic link."""
+
+
 class SolverError(ShakedownError, RuntimeError):
     """A numerical solver failed unexpectedly; ``partial`` holds whatever was computed."""
 

@@ -12,13 +12,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import InputError, ShapeError
+from .validation import check_count, real_array
 
 
 def _vector(name: str, value, n: int | None) -> np.ndarray:
-    try:
-        arr = np.array(value, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"{name} must be a real array; got {value!r}") from exc
+    arr = real_array(name, value)
+    if arr.ndim == 1 and arr.shape[0] == 0:
+        raise ShapeError(f"{name} is empty: a load needs at least one node (N >= 1)")
     if arr.ndim != 1 or (n is not None and arr.shape != (n,)):
         want = f"({n},)" if n is not None else "(N,)"
         raise ShapeError(f"{name} must have shape {want}; got shape {arr.shape}")
@@ -27,16 +27,25 @@ def _vector(name: str, value, n: int | None) -> np.ndarray:
     return arr
 
 
+def _static_pair(q0, p0) -> tuple[np.ndarray, np.ndarray]:
+    """``q0`` and ``p0``, one entry per node each; a length mismatch names both (issue 9)."""
+    q0, p0 = _vector("q0", q0, None), _vector("p0", p0, None)
+    if q0.shape != p0.shape:
+        raise ShapeError(
+            f"q0 has {q0.size} entries but p0 has {p0.size}: both need one entry per node; "
+            "fix the one whose length is not the number of nodes"
+        )
+    return q0, p0
+
+
 def _table(name: str, value, n: int, *, allow_1d: bool) -> np.ndarray:
-    try:
-        arr = np.array(value, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"{name} must be a real array; got {value!r}") from exc
+    arr = real_array(name, value)
     if arr.ndim == 1 and allow_1d:
         arr = arr[None, :]
     if arr.ndim != 2 or arr.shape[1] != n:
         shapes = f"({n},) or (n_harmonics, {n})" if allow_1d else f"(n_samples, {n})"
-        raise ShapeError(f"{name} must have shape {shapes}; got shape {np.shape(value)}")
+        raise ShapeError(f"{name} must have shape {shapes} (N = {n} nodes, the length of q0); "
+                         f"got shape {np.shape(value)}")
     if not np.all(np.isfinite(arr)):
         raise InputError(f"{name} must be finite; got {arr[~np.isfinite(arr)][0]}")
     return arr
@@ -85,9 +94,8 @@ class LoadCycle:
         ``(n_harmonics, N)``; omitted arrays are zero.  Arrays with fewer harmonics are
         zero-padded.
         """
-        q0 = _vector("q0", q0, None)
+        q0, p0 = _static_pair(q0, p0)
         n = q0.shape[0]
-        p0 = _vector("p0", p0, n)
         given = {"q_cos": q_cos, "q_sin": q_sin, "p_cos": p_cos, "p_sin": p_sin}
         tables = {
             k: _table(k, v, n, allow_1d=True) for k, v in given.items() if v is not None
@@ -109,9 +117,8 @@ class LoadCycle:
         Between samples the load is linear; the cycle closes from the last sample back to the
         first.  At least two samples are needed.
         """
-        q0 = _vector("q0", q0, None)
+        q0, p0 = _static_pair(q0, p0)
         n = q0.shape[0]
-        p0 = _vector("p0", p0, n)
         q1 = _table("q1", q1, n, allow_1d=False)
         p1 = _table("p1", p1, n, allow_1d=False)
         if q1.shape != p1.shape:
@@ -220,18 +227,58 @@ class LoadCycle:
         m, t = self.periodic_min(-np.asarray(cq, float), -np.asarray(cp, float))
         return -m, t
 
+    # ------------------------------------------------------------------ sampling error
+    def sampling_error(self, n_samples: int) -> tuple[np.ndarray, np.ndarray]:
+        """Largest error of the periodic part when it is sampled at ``n_samples`` equal steps.
+
+        Per node, ``max_t |r1(t) - r1_S(t)|`` for ``r1 = q1, p1`` and ``r1_S`` the piecewise-linear
+        interpolant through ``t = k / n_samples`` (what :meth:`to_samples` and implicit steps
+        see).  Multiply by ``lam`` for the welded reactions [force].
+
+        Harmonics (closed form): a harmonic ``k`` of amplitude ``a_k`` sampled every
+        ``1 / S`` loses at most ``a_k (1 - cos(pi k / S))`` (reached when a peak falls midway
+        between samples: the chord lies ``a_k (1 - cos(pi k / S))`` below it); the sum over
+        harmonics bounds the error of several (exact for one).  Samples: exact, from the
+        breakpoints of both piecewise-linear functions (0 when the sample times are a subset
+        of the new ones).
+
+        Returns
+        -------
+        err_q, err_p : ndarray, shape (N,)
+            [force per unit load factor].
+        """
+        S = check_count("n_samples", n_samples, 2)
+        if self.kind == "harmonic":
+            loss = 1.0 - np.cos(np.pi * np.arange(1, self.n_harmonics + 1) / S)  # (H,)
+            return (loss @ np.hypot(self.q_cos, self.q_sin),
+                    loss @ np.hypot(self.p_cos, self.p_sin))
+        if S % self.n_samples == 0:
+            return np.zeros(self.n_nodes), np.zeros(self.n_nodes)
+        t = np.union1d(np.arange(S) / S, self.breakpoints)
+        exact = self.periodic(t)
+        coarse = self.to_samples(S).periodic(t)
+        return tuple(np.abs(e - c).max(axis=0) for e, c in zip(exact, coarse, strict=True))
+
     # ------------------------------------------------------------------ transformations
     def to_samples(self, n_samples: int) -> LoadCycle:
         """Piecewise-linear interpolant of this load through ``n_samples`` equally spaced samples."""
-        if int(n_samples) < 2:
-            raise InputError(f"n_samples must be >= 2; got {n_samples}")
-        t = np.arange(int(n_samples)) / int(n_samples)
+        n_samples = check_count("n_samples", n_samples, 2)
+        t = np.arange(n_samples) / n_samples
         q1, p1 = self.periodic(t)
         return LoadCycle.from_samples(self.q0, self.p0, q1, p1)
 
     def permuted(self, order) -> LoadCycle:
         """The same load with nodes reordered (``new[i] = old[order[i]]``)."""
-        o = np.asarray(order, int)
+        try:
+            o = np.asarray(order)
+            ok = o.shape == (self.n_nodes,) and o.dtype.kind in "iu"
+        except (TypeError, ValueError):
+            ok = False
+        if not ok or not np.array_equal(np.sort(o), np.arange(self.n_nodes)):
+            raise InputError(
+                f"order must be a permutation of 0..{self.n_nodes - 1} (each node exactly "
+                f"once, integers); got {order!r}"
+            )
         if self.kind == "samples":
             return LoadCycle.from_samples(self.q0[o], self.p0[o], self.q1[:, o], self.p1[:, o])
         return LoadCycle.from_harmonics(

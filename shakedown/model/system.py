@@ -15,7 +15,9 @@ from functools import cached_property
 import numpy as np
 import scipy.linalg as sla
 
-from .errors import InputError, NotPositiveDefiniteError, NotSymmetricError, ShapeError
+from . import citations
+from .errors import InputError, NotSymmetricError, ShapeError
+from .validation import check_conditioning, real_array
 
 #: Relative tolerance of the symmetry check ``max|K - K^T| <= SYMMETRY_RTOL * max|K|``.
 #: FE condensation in double precision reaches ~1e-13; 1e-8 leaves room for matrices read
@@ -31,14 +33,15 @@ EXACT_CRITICAL_FRICTION_MAX_NODES = 4
 
 
 def _as_matrix(name: str, value, n: int | None = None) -> np.ndarray:
-    try:
-        arr = np.array(value, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"{name} must be a real 2-D array; got {type(value).__name__}") from exc
+    arr = real_array(name, value, what="a real 2-D array")
     if arr.ndim == 0 and n is None:
         arr = arr.reshape(1, 1)
     if arr.ndim != 2 or arr.shape[0] != arr.shape[1]:
         raise ShapeError(f"{name} must be a square 2-D array (N, N); got shape {arr.shape}")
+    if arr.shape[0] == 0:
+        raise ShapeError(
+            f"{name} has shape {arr.shape}: a system needs at least one contact node (N >= 1)"
+        )
     if n is not None and arr.shape != (n, n):
         raise ShapeError(f"{name} must have shape ({n}, {n}) to match A; got shape {arr.shape}")
     if not np.all(np.isfinite(arr)):
@@ -50,12 +53,15 @@ def _as_matrix(name: str, value, n: int | None = None) -> np.ndarray:
 
 
 def _as_friction(value, n: int) -> np.ndarray:
-    try:
-        f = np.array(value, dtype=float)
-    except (TypeError, ValueError) as exc:
+    kind = np.asarray(value).dtype.kind if not isinstance(value, (str, bytes)) else "U"
+    if kind in "bUS" or ((kind == "O" or isinstance(value, (list, tuple)))
+                         and not _all_numbers(value)):
+        # "0.7" and True would convert silently to 0.7 and 1.0 (issue 9)
         raise InputError(
-            f"friction must be a number or an array of shape ({n},); got {value!r}"
-        ) from exc
+            f"friction must be a number >= 0 or one number per node (shape ({n},)); got "
+            f"{value!r} ({type(value).__name__}): write it as a plain number, e.g. friction=0.7"
+        )
+    f = real_array("friction", value, what=f"a number or an array of shape ({n},)")
     if f.ndim == 0:
         f = np.full(n, float(f))
     if f.shape != (n,):
@@ -67,6 +73,13 @@ def _as_friction(value, n: int) -> np.ndarray:
         raise InputError(f"friction must be >= 0; node {j} has friction {f[j]}")
     f.setflags(write=False)
     return f
+
+
+def _all_numbers(value) -> bool:
+    """Every leaf of ``value`` is a real number (not a bool or a string)."""
+    flat = np.asarray(value, dtype=object).ravel()
+    return all(isinstance(x, (int, float, np.integer, np.floating))
+               and not isinstance(x, (bool, np.bool_)) for x in flat)
 
 
 @dataclass(frozen=True)
@@ -166,16 +179,8 @@ class DiscreteSystem:
         # store exactly symmetric blocks so that downstream factorizations see symmetric data
         A = 0.5 * (A + A.T)
         C = 0.5 * (C + C.T)
-        K = np.block([[A, B], [B.T, C]])
-        try:
-            np.linalg.cholesky(K)
-        except np.linalg.LinAlgError:
-            lam_min = float(np.linalg.eigvalsh(K)[0])
-            raise NotPositiveDefiniteError(
-                f"K = [[A, B], [B^T, C]] must be positive definite; Cholesky failed "
-                f"(smallest eigenvalue {lam_min:.6g}). A reduced stiffness of a body held "
-                "against rigid-body motion is always SPD: check the signs and the condensation"
-            ) from None
+        # positive definite and not numerically singular (cond <= MAX_CONDITION)
+        check_conditioning("K = [[A, B], [B^T, C]]", np.block([[A, B], [B.T, C]]))
         for arr in (A, B, C):
             arr.setflags(write=False)
         object.__setattr__(self, "A", A)
@@ -235,7 +240,12 @@ class DiscreteSystem:
 
     # ------------------------------------------------------------------ critical friction
     def critical_friction(self, max_exact_nodes: int = EXACT_CRITICAL_FRICTION_MAX_NODES):
-        """Critical friction of the incremental problem (MODEL.md s.4).
+        """Critical friction of the incremental problem (MODEL.md s.4), computed once.
+
+        The answer depends only on the (frozen) system, so it is cached per
+        ``max_exact_nodes`` on the instance: every step solver, cycle run and study row of the
+        same system shares one computation (``with_friction`` returns a new system with its
+        own cache).
 
         The step LCP has a unique solution for every data iff, for every slip-direction sign
         matrix ``S = diag(s)``, ``s in {-1, 1}^N``, the matrix
@@ -255,6 +265,14 @@ class DiscreteSystem:
         -------
         CriticalFriction
         """
+        citations.register("klarbring1990")
+        cache = self.__dict__.setdefault("_critical_cache", {})
+        key = int(max_exact_nodes)
+        if key not in cache:
+            cache[key] = self._critical_friction(key)
+        return cache[key]
+
+    def _critical_friction(self, max_exact_nodes: int):
         n = self.n_nodes
         f = self.friction
         fmax = float(f.max()) if n else 0.0

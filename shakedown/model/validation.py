@@ -27,6 +27,27 @@ def check_load_factor(lam) -> float:
     return lam
 
 
+def check_positive(name: str, value, *, unit: str = "") -> float:
+    """``value`` as a finite float ``> 0`` (a length, a modulus, a density)."""
+    try:
+        x = float(value)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{name} must be a finite number > 0{unit}; got {value!r}") from exc
+    if not (np.isfinite(x) and x > 0):
+        raise InputError(f"{name} must be a finite number > 0{unit}; got {x}")
+    return x
+
+
+def check_count(name: str, value, minimum: int) -> int:
+    """``value`` as an integer ``>= minimum``; bools, NaN, fractions and text are refused."""
+    ok = isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
+    if not ok and isinstance(value, (float, np.floating)) and np.isfinite(value):
+        ok = float(value).is_integer()
+    if not ok or int(value) < minimum:
+        raise InputError(f"{name} must be an integer >= {minimum}; got {value!r}")
+    return int(value)
+
+
 def check_node_vector(name: str, value, n: int, *, nonneg: bool = False,
                       what: str = "value") -> np.ndarray:
     """A finite array of shape ``(n,)`` (one ``what`` per node); ``nonneg`` forbids negatives."""
@@ -42,3 +63,109 @@ def check_node_vector(name: str, value, n: int, *, nonneg: bool = False,
         j = int(np.argmax(x < 0))
         raise InputError(f"{name} must be >= 0 (nodes cannot penetrate); node {j} has {x[j]}")
     return x
+
+
+#: Largest accepted condition number of a stiffness ``K`` (LAPACK's 1-norm estimate from the
+#: Cholesky factor).  A solve with ``K`` loses ``log10(cond)`` digits: at ``cond = 1e12`` about
+#: ``cond * eps = 2e-4`` relative error is left, the size of the solvers' verification
+#: tolerances relative to the load, so beyond it no answer could be certified.
+MAX_CONDITION = 1e12
+
+
+def real_array(name: str, value, *, what: str = "a real array") -> np.ndarray:
+    """``value`` as a float array; complex, boolean-free object or text input is an error.
+
+    Complex input is refused rather than cast (numpy would drop the imaginary part with only
+    a warning).
+    """
+    if isinstance(value, np.ndarray) and value.dtype.kind == "c" or (
+        not isinstance(value, np.ndarray) and np.iscomplexobj(_peek(value))
+    ):
+        raise InputError(
+            f"{name} must be {what}; got complex values (pass the real part explicitly, "
+            "e.g. np.real(...), if the imaginary part is round-off)"
+        )
+    try:
+        return np.array(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{name} must be {what}; got {type(value).__name__}") from exc
+
+
+def _peek(value):
+    try:
+        return np.asarray(value)
+    except Exception:  # ragged lists etc.: the float conversion reports them
+        return np.zeros(0)
+
+
+def check_stiffness(name: str, K, *, symmetry_rtol: float = 1e-8,
+                    max_condition: float = MAX_CONDITION) -> np.ndarray:
+    """A finite, symmetric, positive definite, not numerically singular square matrix.
+
+    Parameters
+    ----------
+    name : str
+        How the message calls the matrix (e.g. ``"K"``).
+    K : array_like, shape (m, m)
+        Stiffness [force / length].
+    symmetry_rtol : float
+        ``max|K - K^T| <= symmetry_rtol * max|K|`` is accepted (then symmetrised).
+    max_condition : float
+        Largest accepted (estimated 1-norm) condition number.
+
+    Returns
+    -------
+    ndarray
+        The exactly symmetric matrix ``(K + K^T) / 2``.
+    """
+    from .errors import NotSymmetricError
+
+    K = real_array(name, K)
+    if K.ndim != 2 or K.shape[0] != K.shape[1] or K.shape[0] == 0:
+        raise ShapeError(f"{name} must be a non-empty square matrix; got shape {K.shape}")
+    if not np.all(np.isfinite(K)):
+        bad = tuple(int(i) for i in np.argwhere(~np.isfinite(K))[0])
+        raise InputError(f"{name} must be finite; entry {bad} is {K[bad]}")
+    scale = float(np.abs(K).max())
+    asym = float(np.abs(K - K.T).max())
+    if asym > symmetry_rtol * scale:
+        i, j = np.unravel_index(np.argmax(np.abs(K - K.T)), K.shape)
+        raise NotSymmetricError(
+            f"{name} must be symmetric: {name}[{i},{j}] = {K[i, j]:.6g} but {name}[{j},{i}] = "
+            f"{K[j, i]:.6g} (max asymmetry {asym:.3g} > {symmetry_rtol:g} * max|{name}|); "
+            "symmetrise it, e.g. (K + K.T) / 2"
+        )
+    K = 0.5 * (K + K.T)
+    check_conditioning(name, K, max_condition=max_condition)
+    return K
+
+
+def check_conditioning(name: str, K: np.ndarray, *, max_condition: float = MAX_CONDITION):
+    """Cholesky of the symmetric finite ``K``; positive definite and ``cond(K) <= max_condition``.
+
+    The condition number is LAPACK's ``dpocon`` estimate (1-norm, O(m^2) from the factor).
+    """
+    import scipy.linalg as sla
+    from scipy.linalg import lapack
+
+    from .errors import NotPositiveDefiniteError
+
+    try:
+        R = sla.cholesky(K, lower=False, check_finite=False)  # K is checked finite above
+    except np.linalg.LinAlgError:
+        lam_min = float(np.linalg.eigvalsh(K)[0])
+        raise NotPositiveDefiniteError(
+            f"{name} must be positive definite; Cholesky failed (smallest eigenvalue "
+            f"{lam_min:.6g}). A reduced stiffness of a body held against rigid-body motion is "
+            "always SPD: check the signs and the condensation"
+        ) from None
+    anorm = float(np.abs(K).sum(axis=0).max())
+    rcond, info = lapack.dpocon(R, anorm)
+    if info != 0 or not rcond > 1.0 / max_condition:
+        cond = 1.0 / rcond if rcond > 0 else float("inf")
+        raise NotPositiveDefiniteError(
+            f"{name} is numerically singular: condition number ~{cond:.3g} > {max_condition:.0e} "
+            "(its smallest stiffness is below round-off of its largest); remove the "
+            "rigid-body or zero-stiffness modes, or rescale the degrees of freedom"
+        )
+    return R

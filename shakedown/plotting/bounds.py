@@ -38,7 +38,7 @@ def plot_constraints_2d(system, load, lam: float, *, t=None, ax=None, limits=Non
     """The four constraint lines of a two-node system in ``v``-space (seed 002 Figs. 2-4).
 
     Constraint ``I``/``II`` belong to node 1 (slip backward / forward), ``III``/``IV`` to node 2
-    (the seed's numbering; the package's labels are ``I_0, I_1, II_0, II_1``).  Extreme
+    (the seed's numbering; the package's labels are ``I_1, I_2, II_1, II_2``, nodes from 1).  Extreme
     positions are dashed, the safe shakedown region ``H(lam)`` is shaded, and if ``t`` is given
     the instantaneous lines at time ``t`` (cycles) are drawn solid with the excluded side hatched.
 
@@ -82,8 +82,10 @@ def plot_constraints_2d(system, load, lam: float, *, t=None, ax=None, limits=Non
     for r, k in enumerate(order):
         seg = _line_segment(G[k], b[k], xlim, ylim) if show_extremes else None
         if seg is not None:
+            n = region.normals.shape[1]
+            name = f"{'I' if k < n else 'II'}_{k % n + 1}"  # nodes numbered from 1
             ax.plot(seg[:, 0], seg[:, 1], "--", color=_COLORS[r], lw=1.2,
-                    label=f"{_ROMAN[r]}$^E$ ({region.labels[k]})")
+                    label=f"{_ROMAN[r]}$^E$ ({name})")
         if t is not None:
             bt = extreme_constraints(system, load).instantaneous(system, load, t, lam)[k]
             seg_t = _line_segment(G[k], bt, xlim, ylim)
@@ -102,8 +104,8 @@ def plot_constraints_2d(system, load, lam: float, *, t=None, ax=None, limits=Non
         ax.plot(*np.asarray(state, float), "ko", ms=5, label="state")
     ax.set_xlim(*xlim)
     ax.set_ylim(*ylim)
-    ax.set_xlabel("$v_1$ (slip of node 1)")
-    ax.set_ylabel("$v_2$ (slip of node 2)")
+    ax.set_xlabel("$v_1$, slip of node 1 [length]")
+    ax.set_ylabel("$v_2$, slip of node 2 [length]")
     ax.set_title(rf"extreme constraints at $\lambda$ = {lam:.4g}")
     ax.legend(fontsize=8, loc="best")
     ax.set_aspect("equal", adjustable="box")
@@ -141,17 +143,35 @@ def plot_region_vs_lam(bounds: ShakedownBounds, *, system=None, load=None, lams=
                       x <= bounds.lam2) else 0 for x in lams])
     ax.step(lams, count, where="post", color="tab:blue", label="active extreme constraints")
     ax.set_xlabel(r"load factor $\lambda$")
-    ax.set_ylabel("active constraints", color="tab:blue")
+    ax.set_ylabel(f"active constraints (of {2 * bounds.n_nodes})", color="tab:blue")
     ax.set_ylim(-0.2, 2 * bounds.n_nodes + 0.5)
-    for val, name, style in ((bounds.lam1, r"$\lambda_1$", ":"), (bounds.lam2, r"$\lambda_2$", "--")):
-        if np.isfinite(val):
-            ax.axvline(val, color="k", ls=style, lw=1)
-            ax.text(val, 2 * bounds.n_nodes + 0.2, name, ha="center", va="bottom")
+    lam1, lam2, lam_adj = bounds.lam1, bounds.lam2, bounds.lam_adj
+    # the values go in the legend, not as text on the plot: equal values cannot overlap and
+    # nothing collides with the title
+    same = np.isfinite(lam1) and np.isfinite(lam2) and abs(lam2 - lam1) <= 1e-7 * max(lam2, 1e-300)
+    if same:
+        ax.axvline(lam1, color="k", ls="--", lw=1, label=rf"$\lambda_1 = \lambda_2$ = {lam1:.4g}")
+    else:
+        if np.isfinite(lam2) and np.isfinite(lam1):
+            ax.axvspan(lam1, lam2, color="0.9", zorder=0, label="initial state decides")
+        if np.isfinite(lam1):
+            ax.axvline(lam1, color="k", ls=":", lw=1.2, label=rf"$\lambda_1$ = {lam1:.4g}")
+        if np.isfinite(lam2):
+            ax.axvline(lam2, color="k", ls="--", lw=1, label=rf"$\lambda_2$ = {lam2:.4g}")
+    if np.isfinite(lam_adj) and lam_adj <= lams[-1] and not (
+            np.isfinite(lam1) and abs(lam_adj - lam1) <= 1e-7 * max(lam1, 1e-300)):
+        ax.axvline(lam_adj, color="tab:red", ls="-.", lw=1,
+                   label=rf"$\lambda_{{adj}}$ = {lam_adj:.4g} (node {bounds.adjacency_node + 1})")
     if system is not None and load is not None and system.n_nodes == 2:
         ax2 = ax.twinx()
         ax2.plot(lams, region_curve(system, load, lams), color="tab:orange", label="area of H")
         ax2.set_ylabel(r"area of $\mathcal{H}(\lambda)$", color="tab:orange")
         ax2.set_ylim(bottom=0)
         ax.right_ax = ax2
-    ax.set_title("safe shakedown region against the load factor")
+        lines = ax.get_legend_handles_labels()
+        more = ax2.get_legend_handles_labels()
+        ax.legend(lines[0] + more[0], lines[1] + more[1], fontsize=8, loc="lower left")
+    else:
+        ax.legend(fontsize=8, loc="lower left")
+    ax.set_title("extreme constraints still active against the load factor", fontsize=10)
     return ax

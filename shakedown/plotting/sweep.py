@@ -7,103 +7,174 @@ import numpy as np
 __all__ = ["plot_sweep", "plot_fractions"]
 
 
-def _axes(ax):
+def _axes(ax, size=(7, 4.5)):
     if ax is None:
         import matplotlib.pyplot as plt
 
-        _, ax = plt.subplots(figsize=(7, 4.5))
+        _, ax = plt.subplots(figsize=size)
     return ax
 
 
-def _mark_bounds(ax, realisations):
-    """lam1, lam2: dashed / dotted lines at their means, shaded over their range."""
-    for col, style, label in (("lam1", "--", r"$\lambda_1$"), ("lam2", ":", r"$\lambda_2$")):
-        x = realisations[col].to_numpy(float)
-        x = x[np.isfinite(x)]
-        if not x.size:
-            continue
-        n = len(realisations)
-        ax.axvline(x.mean(), color="k", ls=style, lw=1.2,
-                   label=label + (f" (mean of {n})" if n > 1 else f" = {x.mean():.3g}"))
-        if x.size > 1 and x.max() > x.min():
-            ax.axvspan(x.min(), x.max(), color="k", alpha=0.07, lw=0)
+def _col(axis):
+    if axis not in ("lam", "x"):
+        from ..model.errors import InputError
+
+        raise InputError(f"axis must be 'lam' or 'x' (lam / lam2); got {axis!r}")
+    return axis
 
 
-def plot_sweep(result, ax=None, *, bands: bool = True, realisations: bool = True):
-    """``W*`` against ``lam``: minimum and maximum over initial states, ``lam1``, ``lam2``.
+def _mark_bounds(ax, result, axis):
+    """The band lam1..lam2 shaded; lam_adj (dash-dot) and lam_u (dotted) marked."""
+    r = result.realisations
+    l2 = r["lam2"].to_numpy(float)
+    scale = l2 if axis == "x" else np.ones_like(l2)
+    n = len(r)
 
-    With one realisation, the seed's Fig. 11: the maximum (circles) and minimum (triangles)
-    over the initial states at each ``lam``.  With several, each realisation's points are drawn
-    faintly (``realisations=True``) and the mean over realisations of the minimum and of the
-    maximum with their confidence bands (``result.bands``, Student t) on top.
+    def val(col):
+        x = r[col].to_numpy(float) / scale if col in r else np.full(n, np.nan)
+        return x[np.isfinite(x)]
+
+    l1v, l2v = val("lam1"), val("lam2")
+    mean = " (mean)" if n > 1 else ""
+    if l1v.size and l2v.size:
+        ax.axvspan(l1v.mean(), l2v.mean(), color="0.6", alpha=0.35, lw=0,
+                   label=rf"$\lambda_1$ .. $\lambda_2${mean}: initial state matters")
+    adj = val("lam_adj")
+    if adj.size and l1v.size and adj.mean() < l1v.mean():
+        ax.axvline(adj.mean(), color="k", ls="-.", lw=1,
+                   label=rf"$\lambda_{{adj}}$ = {adj.mean():.3g}{mean}")
+    lu = val("lam_u")
+    if lu.size:
+        ax.axvline(lu.mean(), color="k", ls=":", lw=1.3,
+                   label=rf"$\lambda_u$ = {lu.mean():.3g}{mean}: every crack slips")
+
+
+def _zoom_range(result, col):
+    """``(lo, hi)`` around ``lam_adj .. lam2`` on the plotted axis, or None."""
+    r = result.realisations
+    l1, l2, la = (r[c].to_numpy(float) for c in ("lam1", "lam2", "lam_adj"))
+    scale = l2 if col == "x" else np.ones_like(l2)
+    lo = np.fmin(la, l1) / scale
+    hi = l2 / scale
+    ok = np.isfinite(lo) & np.isfinite(hi)
+    if not ok.any():
+        return None
+    lo, hi = lo[ok].min(), hi[ok].max()
+    return lo - 0.1 * (hi - lo), hi + 0.35 * (hi - lo)
+
+
+def _draw_realisations(ax, s, col, alpha, label):
+    for k, (_, g) in enumerate(s.groupby("realisation")):
+        g = g.sort_values("lam")
+        lab = k == 0 and label
+        ax.plot(g[col], g["W_star_max"], "-o", mfc="none", ms=7, color="C0", alpha=alpha,
+                lw=1, label="max over initial states" if lab else None)
+        ax.plot(g[col], g["W_star_min"], "--^", color="C3", alpha=alpha, ms=4, lw=1,
+                label="min over initial states" if lab else None)
+
+
+def _inset(ax, result, col, alpha):
+    """A zoom on ``lam_adj .. lam2`` (the band is a few per cent of the load-factor range)."""
+    rng = _zoom_range(result, col)
+    if rng is None:
+        return
+    s = result.summary
+    sub = s[(s[col] >= rng[0]) & (s[col] <= rng[1])]
+    if len(sub) < 2:
+        return
+    ins = ax.inset_axes([0.42, 0.52, 0.34, 0.38])
+    _draw_realisations(ins, sub, col, alpha, False)
+    _mark_bounds(ins, result, col)
+    ins.set_xlim(*rng)
+    top = float(np.nanmax(sub["W_star_max"].to_numpy(float)))
+    ins.set_ylim(-0.05 * top if top > 0 else -1, 1.1 * top if top > 0 else 1)
+    ins.tick_params(labelsize=6)
+    ins.set_title(r"zoom: $\lambda_{adj}$ .. $\lambda_2$", fontsize=7)
+
+
+def plot_sweep(result, ax=None, *, axis: str = "lam", bands: bool = True,
+               realisations: bool = True, zoom: bool = True):
+    """``W*`` against ``lam`` (or ``x = lam / lam2``): min and max over initial states.
+
+    One realisation: the maximum (open circles, solid line) and the minimum (filled triangles,
+    dashed line) over the initial states at each load factor, the band ``lam1 .. lam2`` shaded,
+    ``lam_adj`` and ``lam_u`` marked.  Several: each realisation's points faintly, and the mean
+    over realisations of min and max at the points common to all (same ``lam / lam2``) with
+    their confidence bands (``result.bands``).
 
     Parameters
     ----------
     result : SweepResult
     ax : matplotlib Axes, optional
+    axis : {"lam", "x"}
+        Load factor, or load factor over each realisation's ``lam2`` (dimensionless).
+    zoom : bool
+        An inset on ``lam_adj .. lam2``, where the band is.
 
     Returns
     -------
     matplotlib Axes
     """
     ax = _axes(ax)
+    col = _col(axis)
     s = result.summary
     n_real = int(s["realisation"].nunique()) if len(s) else 0
+    alpha = 1.0 if n_real <= 1 else 0.25
     if n_real <= 1 or realisations:
-        alpha = 1.0 if n_real <= 1 else 0.25
-        for r, g in s.groupby("realisation"):
-            first = r == s["realisation"].iloc[0]
-            ax.plot(g["lam"], g["W_star_max"], "o", mfc="none", color="C0", alpha=alpha,
-                    label="max over initial states" if first and n_real <= 1 else None)
-            ax.plot(g["lam"], g["W_star_min"], "^", color="C3", alpha=alpha, ms=5,
-                    label="min over initial states" if first and n_real <= 1 else None)
-            if n_real <= 1:
-                ax.fill_between(g["lam"], g["W_star_min"], g["W_star_max"], color="C0",
-                                alpha=0.12, lw=0)
+        _draw_realisations(ax, s, col, alpha, n_real <= 1)
     if n_real > 1:
         b = result.bands
+        b = b[b["point"].astype(str).str.startswith("g")]
         level = getattr(result, "confidence", 0.95)
-        for col, color, name in (("W_star_max", "C0", "max"), ("W_star_min", "C3", "min")):
-            ax.plot(b["lam"], b[f"{col}_mean"], "-", color=color, lw=1.8,
-                    label=f"{name} over initial states (mean of {n_real})")
+        for c, color, name in (("W_star_max", "C0", "max"), ("W_star_min", "C3", "min")):
+            ax.plot(b[col], b[f"{c}_mean"], "-" if name == "max" else "--", color=color, lw=2,
+                    label=f"{name} over initial states, mean of {n_real} realisations")
             if bands:
-                ax.fill_between(b["lam"], b[f"{col}_lo"], b[f"{col}_hi"], color=color,
-                                alpha=0.2, lw=0, label=f"{level:.0%} confidence")
-    _mark_bounds(ax, result.realisations)
-    ax.set_xlabel(r"load factor $\lambda$")
-    ax.set_ylabel(r"$W^* = W\mu / (4(1-\nu)p_0^2\bar a^2)$")
+                ax.fill_between(b[col], b[f"{c}_lo"], b[f"{c}_hi"], color=color, alpha=0.2,
+                                lw=0, label=f"{level:.0%} confidence of the mean ({name})")
+    _mark_bounds(ax, result, col)
+    ax.set_xlabel(r"load factor $\lambda$" if col == "lam" else r"$\lambda / \lambda_2$")
+    ax.set_ylabel(r"$W^* = W\mu / (4(1-\nu)p_0^2\bar a^2)$ per cycle")
     ax.set_ylim(bottom=min(0.0, ax.get_ylim()[0]))
     spec = getattr(result, "spec", None)
     if spec is not None:
-        ax.set_title(f"{spec.n_cracks} cracks, density {spec.density}, f = {spec.friction}, "
-                     f"{spec.n_realisations} realisation(s) x {spec.n_states} initial states",
-                     fontsize=9)
-    ax.legend(fontsize=8, loc="upper left")
+        ax.set_title(f"Steady dissipation: {spec.n_cracks} cracks, density {spec.density}, "
+                     f"f = {spec.friction}, {spec.n_realisations} realisation(s) x "
+                     f"{spec.n_states} initial states", fontsize=9)
+    ax.legend(fontsize=7, loc="upper left")
+    if zoom:
+        _inset(ax, result, col, alpha if n_real > 1 else 1.0)
     return ax
 
 
-def plot_fractions(result, ax=None):
-    """Fractions of cracks that slip / open during the steady cycle, against ``lam``.
+def plot_fractions(result, ax=None, *, axis: str = "lam"):
+    """Fractions of cracks that slip / open in the steady cycle: min and max over initial states.
 
-    Lines: mean over realisations and initial states; shading: the range over them.  The seed
-    links the return of a unique ``W*`` at large ``lam`` to every crack slipping each cycle.
+    Solid: maximum over the initial states, dashed: minimum (per realisation; faint when there
+    are several).  The seed links the return of a unique ``W*`` to every crack slipping.
 
     Returns
     -------
     matplotlib Axes
     """
-    ax = _axes(ax)
-    runs = result.runs
-    g = runs.groupby("lam_index")
-    lam = g["lam"].first().to_numpy(float)
-    for col, color, label in (("frac_slip", "C2", "slip"), ("frac_open", "C1", "open")):
-        ax.plot(lam, g[col].mean().to_numpy(float), "-o", color=color, ms=4,
-                label=f"fraction that {label}s")
-        ax.fill_between(lam, g[col].min().to_numpy(float), g[col].max().to_numpy(float),
-                        color=color, alpha=0.15, lw=0)
-    _mark_bounds(ax, result.realisations)
-    ax.set_xlabel(r"load factor $\lambda$")
+    ax = _axes(ax, (7, 4))
+    col = _col(axis)
+    s = result.summary
+    n_real = int(s["realisation"].nunique()) if len(s) else 0
+    alpha = 1.0 if n_real <= 1 else 0.3
+    for k, (_, g) in enumerate(s.groupby("realisation")):
+        g = g.sort_values("lam")
+        for c, color, what in (("frac_slip", "C2", "slip"), ("frac_open", "C1", "open")):
+            for ext, ls, mk in (("max", "-", "o"), ("min", "--", "v")):
+                ax.plot(g[col], g[f"{c}_{ext}"], ls, marker=mk, ms=3.5, color=color,
+                        alpha=alpha, lw=1,
+                        label=f"{ext} over initial states: fraction that {what}s"
+                        if k == 0 else None)
+    _mark_bounds(ax, result, col)
+    ax.set_xlabel(r"load factor $\lambda$" if col == "lam" else r"$\lambda / \lambda_2$")
     ax.set_ylabel("fraction of cracks (steady cycle)")
     ax.set_ylim(-0.02, 1.02)
-    ax.legend(fontsize=8, loc="center right")
+    ax.set_title("Cracks that slip / open in the steady cycle"
+                 + (f" ({n_real} realisations)" if n_real > 1 else ""), fontsize=9)
+    ax.legend(fontsize=7, loc="upper left")
     return ax

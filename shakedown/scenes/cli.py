@@ -4,15 +4,27 @@
     shakedown bounds SCENE       shakedown load factors lam1, lam2
     shakedown cycles SCENE       cyclic evolution, steady state, dissipation
     shakedown sweep SCENE        Monte Carlo / parameter sweep
-    shakedown stability SCENE    complementarity eigenvalue check
+    shakedown stability SCENE    critical friction mu* (MCEIP) and growth rates
     shakedown scenes             list the built-in scenes
 
-Results (JSON, CSV, PNG) go to ``--out`` (default ``shakedown-out/<scene name>``).
+What it prints, the same for every command:
+
+* **stdout**: first one verdict per analysis (plain sentences, the answer first), then the
+  details (numbers rounded to 4 significant digits; the JSON files keep full precision), then
+  where the results were written;
+* **stderr**: the progress display (:mod:`shakedown.model.progress`) and log lines; nothing
+  with ``--quiet``; errors as one line ``shakedown: error: ...`` (exit status 2).
+
+Results (JSON, CSV, PNG) go to ``--out`` (default ``shakedown-out/<scene name>``).  Nodes are
+numbered from 1 in everything printed or written.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io
+import os
 import sys
 import time
 from pathlib import Path
@@ -21,89 +33,98 @@ from ..model.errors import InputError, SceneError, ShakedownError
 
 ANALYSIS_COMMANDS = ("bounds", "cycles", "sweep", "stability")
 
+_SET_HELP = ("override an option (TOML value): an analysis option (--set lam=1.2, "
+             "--set cycles.max_cycles=50) or a scene key (--set model.friction=0.4, "
+             "--set model.material.E=2.0, --set load.q0=[0.1,0.2]); repeatable")
+
+_DESCRIPTIONS = {
+    "bounds": "Shakedown load factors lam1 <= lam2 (and lam_adj) by linear programming.",
+    "cycles": "Cyclic evolution from an initial state: shakedown or cyclic slip, W per cycle.",
+    "sweep": "Monte Carlo study of a crack network: W* over realisations x lam x initial states.",
+    "stability": "Critical friction mu* (MCEIP-mu) and growth rates s of the divergence "
+                 "(MCEIP-lam). MCEIP: mixed complementarity eigenvalue problem.",
+}
+
 
 def _parser() -> argparse.ArgumentParser:
+    from .options import options_help
+
     p = argparse.ArgumentParser(
         prog="shakedown",
         description="Shakedown, cyclic dissipation and stability of frictional elastic systems.",
+        epilog="Verdicts and details go to stdout, progress to stderr. "
+               "See 'shakedown <command> --help' for the options of each analysis.",
     )
+    p.add_argument("--version", action="version", version=f"shakedown {_version()}")
     sub = p.add_subparsers(dest="command", required=True)
 
-    def common(sp, scene_optional):
-        sp.add_argument(
-            "scene",
-            nargs="?" if scene_optional else None,
-            default=None,
-            help="scene file (TOML) or built-in scene name"
-            + (" (default: the built-in default scene)" if scene_optional else ""),
-        )
-        sp.add_argument("-o", "--out", default=None, help="output folder")
-        sp.add_argument("-q", "--quiet", action="store_true", help="no progress display")
-        sp.add_argument(
-            "--set",
-            action="append",
-            default=[],
-            metavar="KEY=VALUE",
-            help="override an analysis option (TOML value), e.g. --set lam=1.2 or "
-            "--set cycles.max_cycles=50",
-        )
+    def common(sp):
+        sp.add_argument("scene", nargs="?", default=None,
+                        help="scene file (TOML) or built-in scene name "
+                             "(default: the built-in default scene)")
+        sp.add_argument("-o", "--out", default=None,
+                        help="output folder (default: shakedown-out/<scene name>)")
+        sp.add_argument("-q", "--quiet", action="store_true",
+                        help="no progress display or log on stderr")
+        sp.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help=_SET_HELP)
 
-    common(sub.add_parser("run", help="run every analysis of a scene"), True)
+    fmt = argparse.RawDescriptionHelpFormatter
+    common(sub.add_parser(
+        "run", help="run every analysis of a scene", formatter_class=fmt,
+        description="Run every analysis of the scene's [analyses] tables (bounds if none).",
+        epilog="The options of each analysis: shakedown bounds|cycles|sweep|stability --help"))
     for name in ANALYSIS_COMMANDS:
-        common(sub.add_parser(name, help=f"run the {name} analysis of a scene"), True)
+        common(sub.add_parser(name, help=_DESCRIPTIONS[name].split(":")[0].rstrip("."),
+                              description=_DESCRIPTIONS[name], epilog=options_help(name),
+                              formatter_class=fmt))
     sub.add_parser("scenes", help="list the built-in scenes")
     return p
 
 
-def _parse_value(text: str):
-    from .files import tomllib
+def _version() -> str:
+    from ..model.version import __version__
 
-    try:
-        return tomllib.loads(f"x = {text}")["x"]
-    except tomllib.TOMLDecodeError:
-        return text
+    return __version__
 
 
 def _apply_overrides(scene, names, overrides):
-    """Apply ``--set [analysis.]key=value`` options on top of the scene's analysis tables."""
-    from dataclasses import replace
+    """``--set`` options applied (kept for callers of the 0.1 name; see :mod:`.options`)."""
+    from .options import apply_overrides
 
-    from .files import validate_options
-
-    raw = {name: dict(opts) for name, opts in scene.raw.get("analyses", {}).items()}
-    touched = []
-    for item in overrides:
-        if "=" not in item:
-            raise SceneError(f"--set {item!r}: expected KEY=VALUE (e.g. --set lam=1.2)")
-        key, value = item.split("=", 1)
-        if "." in key:
-            name, key = key.split(".", 1)
-        elif len(names) == 1:
-            name = names[0]
-        else:
-            raise SceneError(f"--set {item!r}: name the analysis, e.g. --set {names[0]}.{key}=...")
-        raw.setdefault(name, {})[key] = _parse_value(value)
-        touched.append(name)
-    analyses = dict(scene.analyses)
-    for name in dict.fromkeys(touched):
-        analyses[name] = validate_options(f"{scene.label} (with --set)", name, raw[name])
-    return replace(scene, analyses=analyses)
+    return apply_overrides(scene, names, overrides)
 
 
 def main(argv=None) -> int:
     args = _parser().parse_args(argv)
     try:
-        return _main(args)
+        return _main(args, sys.argv[1:] if argv is None else argv)
     except (SceneError, InputError, ShakedownError) as exc:
         print(f"shakedown: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("shakedown: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # `shakedown run | head`: the reader stopped early
+        sys.stdout = open(os.devnull, "w")  # noqa: SIM115 -- silence the exit-time flush
+        return 0
 
 
-def _main(args) -> int:
-    from .files import builtin_scenes, load_scene, run_scene
+def format_value(value) -> str:
+    """A detail value for reading: floats to 4 significant digits, lists shortened."""
+    if isinstance(value, bool) or value is None:
+        return str(value)
+    if isinstance(value, float):
+        return f"{value:.4g}"
+    if isinstance(value, (list, tuple)):
+        items = [format_value(v) for v in value[:10]]
+        return "[" + ", ".join(items) + (", ..." if len(value) > 10 else "") + "]"
+    return str(value)
+
+
+def _main(args, argv=()) -> int:
+    from .files import builder_module, builtin_scenes, load_scene, resolved_analyses, run_scene
+    from .manifest import RunRecord
     from .output import OutputFolder, Progress
 
     if args.command == "scenes":
@@ -112,31 +133,40 @@ def _main(args) -> int:
             print(f"{name:24s} {sc.model['kind']:14s} {sc.description}")
         return 0
     scene = load_scene(args.scene)
-    names = None if args.command == "run" else [args.command]
-    if names is None:
-        run_names = list(scene.analyses) or ["bounds"]
-    else:
-        run_names = names
+    run_names = (list(scene.analyses) or ["bounds"]) if args.command == "run" else [args.command]
     if args.set:
         scene = _apply_overrides(scene, run_names, args.set)
     out = OutputFolder(args.out or Path("shakedown-out") / scene.name)
     progress = Progress(enabled=not args.quiet)
-    print(f"scene: {scene.label} ({scene.model['kind']}): {scene.description}".rstrip(": "))
+    record = RunRecord.start(scene, out, resolved_analyses(scene, run_names),  # provenance
+                             builder_module(scene.model["kind"]), argv)
     t0 = time.perf_counter()
-    summaries = run_scene(scene, out, progress, only=run_names)
+    # whatever an analysis prints while it runs is a detail: shown after all verdicts
+    printed = io.StringIO()
+    try:
+        with contextlib.redirect_stdout(printed):
+            summaries = run_scene(scene, out, progress, only=run_names)
+    except BaseException:
+        sys.stdout.write(printed.getvalue())
+        raise
     elapsed = time.perf_counter() - t0
+    for name, summary in summaries.items():
+        print(f"{name}: {summary.get('verdict', '(no verdict)')}")
+    print(f"\nscene: {scene.label} ({scene.model['kind']}): {scene.description}".rstrip(": "))
     for name, summary in summaries.items():
         print(f"\n[{name}]")
         for key, value in summary.items():
-            if isinstance(value, float):
-                value = f"{value:.6g}"
-            print(f"  {key}: {value}")
-    meta = {"scene": scene.label, "analyses": summaries, "elapsed_s": elapsed}
+            if key != "verdict":
+                print(f"  {key}: {format_value(value)}")
+    if printed.getvalue().strip():
+        print("\n" + printed.getvalue().rstrip())
+    meta = {"scene": scene.label, "analyses": summaries, "elapsed_s": elapsed,
+            "node_numbering": "from 1", "cite": record.cite()}
     out.write_json("summary.json", meta)
+    record.finish()
+    print(f"\n{record.cite()} (BibTeX: CITATIONS.bib)")
     print(f"\nresults written to {out.path}/ ({len(set(out.written))} files, {elapsed:.1f} s)")
     return 0
 
-
 if __name__ == "__main__":  # pragma: no cover
     sys.exit(main())
-

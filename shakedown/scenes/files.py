@@ -6,7 +6,7 @@ A scene has four tables::
     name = "two-node coupled"
 
     [model]                 # how to build the DiscreteSystem; `kind` picks the builder
-    kind = "matrices"       # "matrices" | "crack_network" | "fe"
+    kind = "matrices"       # "matrices" | "crack_network" | "fe" | "half_plane"
     A = [[...]]             # builder-specific keys (see shakedown/scenes/builders/<kind>.py)
 
     [load]                  # the periodic welded reactions; keys depend on the model kind
@@ -22,6 +22,7 @@ Every error names the file, the table and key, the value and what is allowed.
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import importlib.resources
 import sys
@@ -29,6 +30,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..model.errors import InputError, SceneError
+from .output import check_plain_name
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -40,6 +42,7 @@ MODEL_KINDS = {
     "matrices": "shakedown.scenes.builders.matrices",
     "crack_network": "shakedown.scenes.builders.crack_network",
     "fe": "shakedown.scenes.builders.fe",
+    "half_plane": "shakedown.scenes.builders.half_plane",
 }
 
 #: Analyses and the module that runs each.
@@ -51,6 +54,14 @@ ANALYSES = {
 }
 
 TOP_LEVEL_TABLES = ("scene", "model", "load", "analyses")
+
+#: Keys of the ``[scene]`` table and their meaning (all optional text).
+SCENE_KEYS = {
+    "name": "name of the scene and of its output folder",
+    "description": "one line shown with the results",
+    "force_unit": "unit of forces, e.g. 'N' or 'N/mm' (used in messages; default [force])",
+    "length_unit": "unit of lengths (slips, gaps), e.g. 'mm' (default [length])",
+}
 
 #: The scene `shakedown run` uses when none is given.
 DEFAULT_SCENE = "default"
@@ -81,6 +92,18 @@ class Scene:
     analyses: dict
     path: Path | None = None
     raw: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def units(self) -> dict:
+        """``{"force": ..., "length": ..., "energy": ...}``: declared units or placeholders."""
+        meta = self.raw.get("scene", {})
+        force = meta.get("force_unit") or "[force]"
+        length = meta.get("length_unit") or "[length]"
+        if "force_unit" in meta and "length_unit" in meta:
+            energy = f"{force} {length}"
+        else:
+            energy = "[force x length]"
+        return {"force": force, "length": length, "energy": energy}
 
     @property
     def directory(self) -> Path:
@@ -121,6 +144,10 @@ def resolve_scene_path(scene: str | Path | None) -> Path:
 def load_scene(scene: str | Path | None = None) -> Scene:
     """Read and validate a scene file (or a built-in scene by name)."""
     path = resolve_scene_path(scene)
+    if path.suffix == ".json":  # a run's manifest.json: its resolved scene (scenes/manifest.py)
+        from .manifest import scene_from_manifest
+
+        return scene_from_dict(scene_from_manifest(path), path=path)
     try:
         raw = tomllib.loads(path.read_text())
     except tomllib.TOMLDecodeError as exc:
@@ -149,10 +176,14 @@ def scene_from_dict(raw: dict, path: Path | None = None) -> Scene:
     meta = raw.get("scene", {})
     _require_table(label, "scene", meta)
     for key in meta:
-        if key not in ("name", "description"):
+        if key not in SCENE_KEYS:
             raise SceneError(
-                f"{label}: [scene] key {key!r} is not allowed; allowed: 'name', 'description'"
+                f"{label}: [scene] key {key!r} is not allowed; allowed: "
+                f"{', '.join(repr(k) for k in SCENE_KEYS)}"
             )
+    for key in SCENE_KEYS:
+        if key in meta:
+            check_type(label, "scene", key, meta[key], str, SCENE_KEYS[key])
     model = raw.get("model")
     if model is None:
         raise SceneError(f"{label}: missing table [model] (with kind = one of {sorted(MODEL_KINDS)})")
@@ -171,8 +202,15 @@ def scene_from_dict(raw: dict, path: Path | None = None) -> Scene:
     for name, opts in analyses_raw.items():
         analyses[name] = validate_options(label, name, opts)
     default_name = path.stem if path is not None else "scene"
+    name = meta.get("name", default_name)
+    if not isinstance(name, str):
+        raise SceneError(f"{label}: [scene] key 'name' = {name!r} must be a string")
+    try:
+        name = check_plain_name(name, "[scene] key 'name'")
+    except InputError as exc:
+        raise SceneError(f"{label}: {exc}") from None
     return Scene(
-        name=str(meta.get("name", default_name)),
+        name=name,
         description=str(meta.get("description", "")),
         model=dict(model),
         load=dict(load),
@@ -204,9 +242,16 @@ def validate_options(label: str, name: str, opts) -> dict:
     """Fill and type-check the options of analysis ``name`` from its ``OPTIONS`` schema."""
     if not isinstance(opts, dict):
         raise SceneError(f"{label}: [analyses.{name}] must be a table; got {opts!r}")
-    schema = analysis_module(name, label).OPTIONS
+    module = analysis_module(name, label)
+    schema = module.OPTIONS
+    aliases = getattr(module, "ALIASES", {})  # old option names still accepted
     out = {}
     for key, value in opts.items():
+        if key in aliases:
+            if aliases[key] in opts:
+                raise SceneError(f"{label}: [analyses.{name}] give {aliases[key]!r} or its old "
+                                 f"name {key!r}, not both")
+            key = aliases[key]
         if key not in schema:
             raise SceneError(
                 f"{label}: [analyses.{name}] key {key!r} is not allowed; allowed: "
@@ -217,6 +262,12 @@ def validate_options(label: str, name: str, opts) -> dict:
     for key, (_, default, _) in schema.items():
         out.setdefault(key, default)
     return out
+
+
+def resolved_analyses(scene: Scene, names: list[str]) -> dict:
+    """``{name: options}`` of the analyses ``names`` as they run (every option filled)."""
+    return {name: scene.analyses.get(name) or validate_options(scene.label, name, {})
+            for name in names}
 
 
 def check_type(label, table, key, value, typ, help_=""):
@@ -258,7 +309,7 @@ class AnalysisContext:
         self.progress.log(message)
 
 
-def build(scene: Scene, output=None):
+def build(scene: Scene, output=None, progress=None):
     """Build ``(system, load, extra)`` for a scene with its model kind's builder.
 
     ``output`` (an :class:`~shakedown.output.OutputFolder`) is where builders that cache
@@ -271,8 +322,10 @@ def build(scene: Scene, output=None):
     kwargs = {}
     if output is not None and "cache_root" in inspect.signature(builder.build).parameters:
         kwargs["cache_root"] = output.path
+    phase = progress.phase if progress is not None else _no_phase
     try:
-        return builder.build(model, scene.load, scene.directory, **kwargs)
+        with phase(f"building the {scene.model['kind']} model of {scene.label}"):
+            return builder.build(model, scene.load, scene.directory, **kwargs)
     except SceneError as exc:
         msg = str(exc)
         if scene.label not in msg:
@@ -282,12 +335,17 @@ def build(scene: Scene, output=None):
         raise SceneError(f"{scene.label}: the model or load is invalid: {exc}") from exc
 
 
+@contextlib.contextmanager
+def _no_phase(desc):
+    yield
+
+
 def run_scene(scene: Scene, output, progress, only: list[str] | None = None) -> dict:
     """Run the scene's analyses (or ``only`` those) and return ``{name: summary}``."""
     names = list(only) if only else list(scene.analyses) or ["bounds"]
     for name in names:
         analysis_module(name, scene.label)
-    system, load, extra = build(scene, output)
+    system, load, extra = build(scene, output, progress)
     ctx = AnalysisContext(system, load, extra, output, progress, scene.path, scene)
     summaries = {}
     for name in names:

@@ -5,11 +5,12 @@ from __future__ import annotations
 import json
 import math
 import re
-import sys
-import time
 from pathlib import Path
 
 import numpy as np
+
+from ..model.errors import UnsafePathError
+from ..model.progress import ProgressDisplay
 
 _SAFE_NAME = re.compile(r"^[A-Za-z0-9_.-]+$")
 
@@ -43,6 +44,79 @@ def _finite(obj):
     return obj
 
 
+#: Characters a plain name may not contain: path separators, drive colons, NUL and controls.
+_UNSAFE_CHARS = re.compile(r"[/\\:\x00-\x1f\x7f]")
+
+
+def check_plain_name(name, what: str = "name") -> str:
+    """``name`` if it is a plain name for a file or folder inside the output folder.
+
+    Refused: empty names, ``.`` and ``..``, anything with a path separator (``/``, ``\\``), a
+    drive colon or a control character, names starting with ``~`` or longer than 255
+    characters.  Spaces and non-ASCII letters are fine.
+
+    Raises
+    ------
+    UnsafePathError
+    """
+    text = str(name)
+    if (not text or text.strip() in (".", "..") or _UNSAFE_CHARS.search(text)
+            or text.startswith("~") or len(text) > 255 or text != text.strip()):
+        raise UnsafePathError(
+            f"{what} = {text!r} must be a plain name (no folders, no '/', '\\', ':', '..', "
+            "no leading/trailing spaces, at most 255 characters): it names a folder inside "
+            "the output folder, e.g. 'two_node_coupled'"
+        )
+    return text
+
+
+def write_atomically(path, write) -> Path:
+    """Create ``path`` by writing a new temporary file beside it and renaming it into place.
+
+    ``write(tmp_path)`` writes the content.  A symbolic link at ``path`` is refused (its target
+    is never touched), so is a folder; an interrupted write leaves the old file intact.
+
+    Parameters
+    ----------
+    path : path-like
+        Destination, inside an existing folder.
+    write : callable
+        ``write(tmp_path)``; the temporary file already exists (empty, mode 0600).
+
+    Raises
+    ------
+    UnsafePathError
+        ``path`` is a symbolic link or not a regular file.
+    """
+    import os
+    import tempfile
+
+    path = Path(path)
+    if path.is_symlink() or (path.exists() and not path.is_file()):
+        raise UnsafePathError(
+            f"refusing to write {path}: it is a symbolic link or not a regular file; remove "
+            "it or choose another output folder (--out)"
+        )
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    try:
+        write(Path(tmp))
+        os.chmod(tmp, 0o666 & ~_umask())
+        os.replace(tmp, path)  # atomic; replaces a file, never follows a link at `path`
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def _umask() -> int:
+    import os
+
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
 class OutputFolder:
     """A folder that analyses write into; file names may not leave it.
 
@@ -60,7 +134,7 @@ class OutputFolder:
     def file(self, name: str) -> Path:
         """Path of ``name`` inside the folder (plain file names only)."""
         if not _SAFE_NAME.match(name) or name in (".", ".."):
-            raise ValueError(
+            raise UnsafePathError(
                 f"output file name {name!r} must be a plain file name "
                 "(letters, digits, '_', '-', '.'), without folders"
             )
@@ -69,70 +143,26 @@ class OutputFolder:
         return p
 
     def write_json(self, name: str, obj) -> Path:
-        p = self.file(name)
-        p.write_text(json.dumps(_finite(obj), indent=2, default=_json_default) + "\n")
-        return p
+        text = json.dumps(_finite(obj), indent=2, default=_json_default) + "\n"
+        return write_atomically(self.file(name), lambda p: p.write_text(text))
 
     def write_table(self, name: str, table) -> Path:
         """Write a pandas DataFrame as CSV (``name`` ends in .csv) or Parquet (.parquet)."""
-        p = self.file(name)
         if name.endswith(".parquet"):
-            table.to_parquet(p, index=False)
-        else:
-            table.to_csv(p, index=False)
-        return p
+            return write_atomically(self.file(name), lambda p: table.to_parquet(p, index=False))
+        return write_atomically(self.file(name), lambda p: table.to_csv(p, index=False))
 
     def save_figure(self, name: str, fig, dpi: int = 120) -> Path:
-        p = self.file(name)
-        fig.savefig(p, dpi=dpi, bbox_inches="tight")
         import matplotlib.pyplot as plt
 
-        plt.close(fig)
-        return p
+        fmt = Path(name).suffix.lstrip(".") or None
+        try:
+            return write_atomically(
+                self.file(name), lambda p: fig.savefig(p, dpi=dpi, bbox_inches="tight",
+                                                       format=fmt))
+        finally:
+            plt.close(fig)
 
 
-class Progress:
-    """Progress display on stderr: a live line on a terminal, a few plain lines otherwise.
-
-    Use as ``for item in progress(iterable, total=n, desc="cycles"): ...``.
-    """
-
-    def __init__(self, enabled: bool = True, stream=None):
-        self.enabled = enabled
-        self.stream = stream or sys.stderr
-
-    def __call__(self, iterable, total: int | None = None, desc: str = ""):
-        if total is None:
-            try:
-                total = len(iterable)
-            except TypeError:
-                total = None
-        if not self.enabled:
-            yield from iterable
-            return
-        tty = hasattr(self.stream, "isatty") and self.stream.isatty()
-        t0 = time.perf_counter()
-        last_report = -1.0
-        i = 0
-        for i, item in enumerate(iterable, start=1):
-            yield item
-            now = time.perf_counter() - t0
-            if tty or total is None or now - last_report > 5.0 or i == total:
-                self.stream.write(self._line(desc, i, total, now) + ("\r" if tty else "\n"))
-                self.stream.flush()
-                last_report = now
-        if tty:
-            self.stream.write("\n")
-            self.stream.flush()
-
-    @staticmethod
-    def _line(desc, i, total, elapsed):
-        if total:
-            eta = elapsed / i * (total - i) if i else float("nan")
-            return f"{desc}: {i}/{total} ({100 * i / total:3.0f}%) {elapsed:6.1f} s, ~{eta:5.1f} s left"
-        return f"{desc}: {i} {elapsed:6.1f} s"
-
-    def log(self, message: str) -> None:
-        if self.enabled:
-            self.stream.write(message + "\n")
-            self.stream.flush()
+#: The command's progress display (tqdm on stderr); the old name is kept.
+Progress = ProgressDisplay

@@ -31,6 +31,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import brentq
 
+from ..model import citations
 from ..model.errors import InputError
 
 
@@ -46,6 +47,7 @@ def layer_critical_friction(D) -> tuple[float, float]:
 
     ``(inf, 0)`` when ``D24 = 0`` (e.g. isotropic).
     """
+    citations.register("agwa2007")
     Dm = _Dm(D)
     if abs(Dm[0, 1]) <= 1e-14 * np.abs(Dm).max():
         return float("inf"), 0.0
@@ -86,6 +88,7 @@ def layer_growth_rates(D, mu: float, *, chi: float | None = None, height: float 
     ``chi`` defaults to the unstable direction ``-sign(D24)``; ``lam_max`` to
     ``50 sqrt(max d / rho) / h``.
     """
+    citations.register("agwa2007")
     mu_cr, chi0 = layer_critical_friction(D)
     if chi is None:
         chi = chi0

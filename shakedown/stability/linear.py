@@ -13,6 +13,8 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse.linalg as spla
 
+from ..model.errors import InputError, ShapeError
+from ..model.validation import real_array
 from .pencil import SlipPencil
 from .result import SUPPORT_RTOL, VERIFY_TOL, MCEIPResult, make_result, no_solution
 
@@ -53,6 +55,11 @@ def restricted_eigenpairs(K0, K1, support=None, *, sign_rtol: float = SUPPORT_RT
         Sorted by ``mu``; ``x_J`` scaled so that its largest entry is ``+1``;
         ``single_signed`` when ``min(x_J) >= -sign_rtol``.
     """
+    K0, K1 = real_array("K0", K0), real_array("K1", K1)
+    if K0.ndim != 2 or K0.shape[0] != K0.shape[1] or K1.shape != K0.shape:
+        raise ShapeError(f"K0 and K1 must be square of one shape; got {K0.shape}, {K1.shape}")
+    if not (np.all(np.isfinite(K0)) and np.all(np.isfinite(K1))):
+        raise InputError("K0 and K1 must be finite; got a NaN or inf entry")
     nu_min = NU_RTOL * np.abs(K1).max(initial=0.0) / max(np.abs(K0).max(initial=0.0), 1e-300)
     if support is not None:
         J = np.asarray(support, dtype=int)
@@ -63,7 +70,7 @@ def restricted_eigenpairs(K0, K1, support=None, *, sign_rtol: float = SUPPORT_RT
         if -k1 / K0[0, 0] > nu_min:
             return [(-K0[0, 0] / k1, np.ones(1), True)]
         return []
-    nu, V = sla.eig(-K1, K0, check_finite=False)
+    nu, V = sla.eig(-K1, K0, check_finite=False)  # checked finite above
     return _pairs_from(nu, V, sign_rtol, nu_min)
 
 

@@ -24,6 +24,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from ..model import citations
 from ..model.errors import InputError
 from .classify import NodePartition
 from .enumerate import MAX_ENUMERATION_NODES, enumerate_solutions, enumeration
@@ -104,6 +105,7 @@ def mceip_mu(
     >>> round(r.mu, 12), r.status            # mu* = A / |B| with chi = -sign(B)
     (2.0, 'found')
     """
+    citations.register("agwa2007")
     if method not in METHODS:
         raise InputError(f"method must be one of {METHODS}; got {method!r}")
     pen = _pencil(stiffness, partition, lam, friction_profile, mass)

@@ -28,6 +28,8 @@ import numpy as np
 import scipy.linalg as sla
 
 from ..model.errors import InputError, ShapeError
+from ..model.system import SYMMETRY_RTOL
+from ..model.validation import check_node_vector, check_stiffness, real_array
 from .classify import FREE, FRICTIONLESS, SLIP, NodePartition
 
 
@@ -57,6 +59,27 @@ class SlipPencil:
     chi: np.ndarray
     profile: np.ndarray
     lam: float = 0.0
+
+    def __post_init__(self):
+        # a pencil a user builds by hand is checked like one from slip_pencil: the eigen-solvers
+        # downstream call LAPACK on K0 and K1 without further checks
+        K0 = check_stiffness("K0", self.K0, symmetry_rtol=SYMMETRY_RTOL)
+        m = K0.shape[0]
+        K1 = real_array("K1", self.K1)
+        if K1.shape != (m, m):
+            raise ShapeError(f"K1 must have the shape of K0 ({m}, {m}); got {K1.shape}")
+        if not np.all(np.isfinite(K1)):
+            raise InputError("K1 must be finite; got a NaN or inf entry")
+        prof = check_node_vector("profile", self.profile, m, nonneg=True, what="friction ratio")
+        chi = check_node_vector("chi", self.chi, m, what="slip direction")
+        if not np.all(np.abs(chi) == 1):
+            raise InputError(f"chi must be +1 or -1 per slip node; got {chi}")
+        for a in (K0, K1, prof, chi):
+            a.setflags(write=False)
+        object.__setattr__(self, "K0", K0)
+        object.__setattr__(self, "K1", K1)
+        object.__setattr__(self, "profile", prof)
+        object.__setattr__(self, "chi", chi)
 
     @property
     def size(self) -> int:
@@ -99,9 +122,10 @@ def as_dynamic_stiffness(source, mass=None):
         return source.dynamic_stiffness
     if callable(source) and not isinstance(source, np.ndarray):
         return source
-    K = np.asarray(source.K if hasattr(source, "K") else source, dtype=float)
+    K = real_array("K", source.K if hasattr(source, "K") else source)
     if K.ndim != 2 or K.shape[0] != K.shape[1] or K.shape[0] % 2:
         raise ShapeError(f"K must have shape (2N, 2N); got {K.shape}")
+    K = check_stiffness("K", K, symmetry_rtol=SYMMETRY_RTOL)
     if mass is None:
 
         def static_only(s):
@@ -113,9 +137,11 @@ def as_dynamic_stiffness(source, mass=None):
             return K
 
         return static_only
-    M = np.asarray(mass, dtype=float)
+    M = real_array("mass", mass)
     if M.shape != K.shape:
         raise ShapeError(f"mass must have shape {K.shape} like K; got {M.shape}")
+    if not np.all(np.isfinite(M)) or np.abs(M - M.T).max() > SYMMETRY_RTOL * np.abs(M).max():
+        raise InputError("mass must be a finite symmetric matrix (2N, 2N)")
     return lambda s: K + s * M
 
 
@@ -152,15 +178,21 @@ def slip_pencil(
             f"partition must be a NodePartition; got {type(partition).__name__} "
             "(use classify_nodes or NodePartition.from_states)"
         )
+    try:
+        lam = float(lam)
+    except (TypeError, ValueError):
+        raise InputError(f"lam must be a number >= 0; got {lam!r}") from None
     if not (np.isfinite(lam) and lam >= 0):
         raise InputError(f"lam must be finite and >= 0; got {lam}")
-    K = np.asarray(as_dynamic_stiffness(stiffness, mass)(float(lam) ** 2), dtype=float)
+    K = real_array("K(s)", as_dynamic_stiffness(stiffness, mass)(lam**2))
     n = partition.n_nodes
     if K.shape != (2 * n, 2 * n):
         raise ShapeError(
             f"K must have shape (2N, 2N) = ({2 * n}, {2 * n}) for a partition of {n} nodes; "
             f"got {K.shape}"
         )
+    # every source (array, system, callable, FE model) is checked at the s it is used at
+    K = check_stiffness(f"K(s = {lam**2:g})", K, symmetry_rtol=SYMMETRY_RTOL)
     states = partition.states
     s = np.flatnonzero(states == SLIP)
     if s.size == 0:
@@ -188,9 +220,11 @@ def slip_pencil(
     if friction_profile is None:
         prof = np.ones(m)
     else:
-        prof = np.broadcast_to(np.asarray(friction_profile, dtype=float), (n,))[s]
-        if np.any(prof < 0) or not np.all(np.isfinite(prof)):
-            raise InputError("friction_profile must be finite and >= 0")
+        prof = real_array("friction_profile", friction_profile)
+        if prof.ndim == 0:
+            prof = np.full(n, float(prof))
+        prof = check_node_vector("friction_profile", prof, n, nonneg=True,
+                                 what="friction ratio")[s]
     K0 = chi[:, None] * S_tt * chi[None, :]
     K1 = prof[:, None] * S_nt * chi[None, :]
     for a in (K0, K1):

@@ -23,6 +23,7 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.optimize import nnls
 
+from ..model import citations
 from .linear import restricted_eigenpairs
 from .pencil import SlipPencil
 from .result import VERIFY_TOL, MCEIPResult, make_result, no_solution
@@ -88,6 +89,7 @@ def power_iteration(
     MCEIPResult
         ``method="power"``; ``history`` holds ``mu_n``; ``iterations`` the QPs solved.
     """
+    citations.register("hassani2007")
     n = pencil.size
     R = sla.cholesky(pencil.K0, lower=False, check_finite=False)
     if g0 is not None:

@@ -57,7 +57,7 @@ def test_crackset_basic_geometry():
         (([[0, 0]], [0.0], [0.0]), InputError, "half_lengths must be > 0; crack 0"),
         (([[0, np.nan]], [1.0], [0.0]), InputError, "centres must be finite; crack 0"),
         (([[0, 0]], [1.0], [np.inf]), InputError, "angles must be finite"),
-        (([[0, 0], [0, 0.5]], [1.0, 1.0], [0.0, 1.0]), InputError, "cracks 0 (centre"),
+        (([[0, 0], [0, 0.5]], [1.0, 1.0], [0.0, 1.0]), InputError, "cracks 1 (centre"),
         ((np.zeros((0, 2)), [], []), InputError, "at least one crack"),
         (("abc", [1.0], [0.0]), InputError, "centres must be a real array"),
     ],

@@ -288,7 +288,8 @@ def test_nodes_open_and_close_every_cycle():
     assert run.steady_dissipation == pytest.approx(ev.steady_dissipation, rel=1.5e-2)
 
 
-@pytest.mark.slow  # ~10-25 s on 2 busy cores, mostly building and checking the 4000 x 4000 K
+# in the default run since the step work of issue 14: 4.4 s on 2 busy cores (load 7), mostly
+# building and checking the 4000 x 4000 K (Cholesky) and four fresh LU factorizations
 def test_n2000_a_few_steps():
     rng = np.random.default_rng(0)
     n = 2000

@@ -29,15 +29,13 @@ RANKS = {
     "shakedown.scenes": 4,
 }
 FACADE = {"shakedown", "shakedown.__main__"}
-MAX_LINES = 400
+MAX_LINES = 420  # "about 400 lines" (ARCHITECTURE.md): 5 % of slack, no more
 #: A module may exceed MAX_LINES only if its docstring says why, with this phrase.
 LONG_REASON = "one coherent algorithm"
 #: Modules still to be split along their seams by the work under way on them (issues 13/14:
 #: bounds engine, step solver, studies).  This set only shrinks.
 PENDING_SPLIT = {
-    "shakedown.bounds.dense_lp", "shakedown.bounds.engine", "shakedown.evolution.complementarity",
-    "shakedown.evolution.cycles", "shakedown.evolution.steady", "shakedown.studies.store",
-    "shakedown.studies.sweep", "shakedown.models.fe.meshes",
+    "shakedown.bounds.dense_lp", "shakedown.bounds.engine",
 }
 
 

@@ -54,8 +54,11 @@ def test_samples_interpolation_and_round_trip():
 
 
 def test_bad_input_messages():
-    with pytest.raises(sd.ShapeError, match=r"p0 must have shape \(2,\)"):
+    # a length mismatch names both vectors (issue 9: a wrong q0 used to be reported as p0)
+    with pytest.raises(sd.ShapeError, match="q0 has 2 entries but p0 has 1"):
         sd.LoadCycle.from_harmonics([0.0, 0.0], [1.0])
+    with pytest.raises(sd.ShapeError, match="q0 has 3 entries but p0 has 2"):
+        sd.LoadCycle.from_samples([0.0, 0.0, 1.0], [1.0, 1.0], np.ones((3, 2)), np.ones((3, 2)))
     with pytest.raises(sd.InputError, match="q0 must be finite"):
         sd.LoadCycle.from_harmonics([np.inf], [1.0])
     with pytest.raises(sd.ShapeError, match="q_cos must have shape"):
@@ -64,5 +67,5 @@ def test_bad_input_messages():
         sd.LoadCycle.from_samples([0.0], [1.0], [[1.0]], [[0.0]])
     with pytest.raises(sd.ShapeError, match="q1 and p1 must have the same shape"):
         sd.LoadCycle.from_samples([0.0], [1.0], np.ones((3, 1)), np.ones((4, 1)))
-    with pytest.raises(sd.InputError, match="n_samples must be >= 2"):
+    with pytest.raises(sd.InputError, match="n_samples must be an integer >= 2"):
         sd.LoadCycle.static([0.0], [1.0]).to_samples(1)

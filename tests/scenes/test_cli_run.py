@@ -67,7 +67,7 @@ def test_run_writes_the_bounds_of_the_api(run_output):
     assert data["lam1"] == pytest.approx(b.lam1, rel=1e-9)
     assert data["lam2"] == pytest.approx(b.lam2, rel=1e-9)
     assert data["status"] == "bounded"
-    assert "lam2" in r.stdout and f"{b.lam2:.6g}" in r.stdout
+    assert "lam2" in r.stdout and f"{b.lam2:.4g}" in r.stdout  # printed to 4 digits (JSON: full)
 
 
 def test_run_steady_cycle_obeys_equilibrium_and_coulomb(run_output):

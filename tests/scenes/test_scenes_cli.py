@@ -42,7 +42,7 @@ def test_builtin_scenes_load_and_build():
     assert "default" in names
     for name in names:
         sc = load_scene(name)
-        assert sc.model["kind"] in ("matrices", "crack_network", "fe")
+        assert sc.model["kind"] in ("matrices", "crack_network", "fe", "half_plane")
 
 
 def test_scene_builds_the_same_system_as_python(tmp_path):
@@ -106,7 +106,11 @@ def test_console_script_runs_default_scene(tmp_path):
         (("A = [[2.0, 0.5], [0.5, 2.0]]", "A = [[2.0, 0.5], [0.7, 2.0]]"), ["symmetric", "A[0,1]"]),
         (("A = [[2.0, 0.5], [0.5, 2.0]]", "A = [[2.0, 0.5, 1.0], [0.5, 2.0, 1.0]]"), ["A", "shape"]),
         (("A = [[2.0, 0.5], [0.5, 2.0]]", "A = [[-2.0, 0.5], [0.5, 2.0]]"), ["positive definite"]),
-        (("q0 = [0.0, 0.1]", "q0 = [0.0, 0.1, 3.0]"), ["[load]", "p0", "shape (3,)", "(2,)"]),
+        (("q0 = [0.0, 0.1]", "q0 = [0.0, 0.1, 3.0]"), ["[load]", "'q0'", "one value per node (2 nodes)", "[0.0, 0.1, 3.0]"]),
+        (("p0 = [1.0, 1.0]", "p0 = [1.0]"), ["[load]", "'p0'", "one value per node (2 nodes)"]),
+        (("friction = 0.4", "friction = \"0.7\""), ["[model]", "'friction'", "'0.7'", "not a number", "without quotes"]),
+        (("friction = 0.4", "friction = true"), ["[model]", "'friction'", "boolean true", "not a number"]),
+        (("friction = 0.4", "friction = [0.4, \"0.7\"]"), ["[model]", "'friction'", "'0.7'", "not a number"]),
         (("q0 = [0.0, 0.1]", "q00 = [0.0, 0.1]"), ["[load]", "'q00'", "allowed"]),
         (("q_cos = [1.0, 0.0]", "q1 = [[1.0, 0.0], [0.0, 1.0]]"), ["either harmonics", "samples"]),
         (("plots = false", "plots = 3"), ["[analyses.bounds]", "'plots'", "3", "bool"]),

@@ -154,7 +154,7 @@ def test_analysis_fe_growth_rates(tmp_path):
                        _options(chi=[-1], mu=0.6, lam_max=3.0, n_lam=7))
     assert out["mu_star"] == pytest.approx(0.2629238, abs=5e-8)
     assert len(out["growth_rates"]) == 1 and out["growth_status"] == "found"
-    assert (tmp_path / "lam_mu.png").exists() and (tmp_path / "curves.csv").exists()
+    assert (tmp_path / "growth_rates.png").exists() and (tmp_path / "curves.csv").exists()
 
 
 def test_analysis_bad_options(tmp_path):

@@ -12,7 +12,8 @@ from .assembly import Body, BodyForce, Displacement, Pressure, Traction
 from .condense import FEModel
 from .condensed import CondensedModel
 from .materials import Material, isotropic, rotate_voigt, transversely_isotropic
-from .meshes import ELEMENTS, PATTERNS, FEMesh, from_file, polygon, rectangle, trapezoid
+from .meshes import ELEMENTS, PATTERNS, FEMesh, from_file, rectangle, trapezoid
+from .polygons import polygon
 
 __all__ = [
     "layer_uniform_stiffness",

@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...model import citations
 from ...model.errors import InputError
 from .assembly import Body
 from .condensed import CondensedModel, factorize
@@ -198,6 +199,7 @@ class FEModel:
         InputError
             No support (rigid-body modes), non-matching interface or periodic nodes, ...
         """
+        citations.register("gustafsson2020")
         from . import cache
 
         key = None

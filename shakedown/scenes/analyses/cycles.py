@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from ...model.errors import SceneError
+from ...model.errors import SceneError, SolverError
 
 OPTIONS = {
     "lam": (float, 1.0, "load factor lam >= 0"),
@@ -91,8 +91,7 @@ def run(ctx, options: dict) -> dict:
             solver="steady" if options["steady_solver"] else "cycles",
             progress=ctx.progress, **solver,
         )
-        ctx.log(study.summary())
-        ctx.output.write_table("uniqueness.csv", study.table)
+        ctx.output.write_table("uniqueness.csv", _from_one(study.table))
         v0 = study.table[[f"initial_slip_{j}" for j in range(n)]].to_numpy(float)[0]
     sc = None
     if options["steady_solver"]:
@@ -101,19 +100,27 @@ def run(ctx, options: dict) -> dict:
         ctx.log(f"steady_cycle: {sc.status}: {sc.message}; {sc.n_evaluations} periods simulated")
         run_ = sc.run
     else:
-        with _CycleProgress(ctx, options["max_cycles"], f"cycles lam={lam:g}") as cb:
+        desc = f"cycles at lam = {lam:.4g} (stops at a steady state)"
+        with _CycleProgress(ctx, options["max_cycles"], desc, _units(ctx)["energy"]) as cb:
             run_ = solve_cycles(system, load, lam, initial_slip=v0,
                                 max_cycles=options["max_cycles"], progress=cb,
                                 record_history=n == 2 and options["plots"], **solver)
+    if run_ is not None and run_.status == "non_finite":  # overflow is a failure (issue 10)
+        raise SolverError(f"[analyses.cycles] lam = {lam:g}: {run_.message}", partial=run_)
     summary = _summary(run_, lam, options, sc, study)
+    verdict = cycles_verdict(run_, lam, _units(ctx)["energy"], study)
+    summary = {"verdict": verdict, **summary}
     ctx.output.write_json("cycles.json", summary)
     ctx.output.write_table("dissipation.csv", _dissipation_table(run_))
     steady = run_.steady_table if run_.steady_table is not None else pd.DataFrame()
-    ctx.output.write_table("steady_cycle.csv", steady)
+    ctx.output.write_table("steady_cycle.csv", _from_one(steady))
     if options["plots"]:
         _plots(ctx, run_, study, lam, options)
-    keys = ("steady_dissipation", "period", "shook_down", "stuck_nodes", "n_cycles", "status")
+    keys = ("verdict", "steady_dissipation", "period", "shook_down", "stuck_nodes", "n_cycles",
+            "status")
     out = {k: summary[k] for k in keys}
+    if getattr(run_, "within_sampling_error", False):
+        out["sampling_warning"] = run_.message  # the verdict lies within the sampling error
     if study is not None:
         out.update(unique_dissipation=study.unique_dissipation,
                    dissipation_spread=study.dissipation_spread,
@@ -122,27 +129,40 @@ def run(ctx, options: dict) -> dict:
 
 
 class _CycleProgress:
-    """Adapts ``solve_cycles``'s ``progress(cycle, max_cycles, W)`` callback to ``ctx.progress``.
+    """Drives one progress bar from ``solve_cycles``'s ``progress(cycle, max_cycles, W)`` callback."""
 
-    ``ctx.progress`` wraps an iterable and reports an item when the next one is requested; the
-    callback requests one item per finished cycle.
-    """
-
-    def __init__(self, ctx, total, desc):
-        self._gen = iter(ctx.progress(range(total + 1), total=total, desc=desc))
-        next(self._gen, None)  # item 1 handed out: reported at the first finished cycle
+    def __init__(self, ctx, total, desc, energy):
+        bar = getattr(ctx.progress, "bar", None)
+        self._bar = bar(total=total, desc=desc, unit="cycle") if bar else None
+        self._energy = energy
 
     def __call__(self, cycle, max_cycles, W):
-        next(self._gen, None)
+        if self._bar is not None:
+            self._bar.set_postfix_str(f"W = {W:.4g} {self._energy}", refresh=False)
+            self._bar.update(1)
 
     def __enter__(self):
         return self
 
     def __exit__(self, *exc):
-        close = getattr(self._gen, "close", None)
-        if close is not None:
-            close()
+        if self._bar is not None:
+            self._bar.close()
         return False
+
+
+def _from_one(table):
+    """A copy of a result table with nodes numbered from 1 (columns ``node``, ``stuck``,
+    ``initial_slip_<j>``, ``steady_slip_<j>``), as in everything a person reads."""
+    import re
+
+    t = table.copy()
+    if "node" in t:
+        t["node"] = t["node"].astype(int) + 1
+    if "stuck" in t:
+        t["stuck"] = [",".join(str(int(j) + 1) for j in str(x).split(",") if j.strip() != "")
+                      for x in t["stuck"]]
+    pattern = re.compile(r"^(initial_slip|steady_slip|slip|gap)_(\d+)$")
+    return t.rename(columns=lambda c: pattern.sub(lambda m: f"{m[1]}_{int(m[2]) + 1}", c))
 
 
 def _dissipation_table(run):
@@ -161,7 +181,8 @@ def _summary(run, lam, options, sc, study):
         "steady_dissipation": float(run.steady_dissipation),
         "period": int(run.period),
         "shook_down": bool(run.shook_down),
-        "stuck_nodes": [int(j) for j in np.atleast_1d(run.stuck_nodes)],
+        "stuck_nodes": [int(j) + 1 for j in np.atleast_1d(run.stuck_nodes)],
+        "node_numbering": "from 1",
         "n_cycles": int(run.n_cycles),
         "cycles_to_steady": getattr(run, "cycles_to_steady", None),
         "status": str(run.status),
@@ -194,6 +215,75 @@ def _summary(run, lam, options, sc, study):
         elif not isinstance(v, (dict, list, str, int, float, bool, np.ndarray, type(None))):
             d[k] = str(v)
     return d
+
+
+def _units(ctx) -> dict:
+    scene = getattr(ctx, "scene", None)
+    if scene is not None:
+        return scene.units
+    return {"force": "[force]", "length": "[length]", "energy": "[force x length]"}
+
+
+def _slipping_nodes(run) -> list[int]:
+    """Nodes (numbered from 1) that slip somewhere in the steady cycle."""
+    t = run.steady_table
+    if t is None or len(t) == 0 or "state" not in t:
+        return []
+    slipping = t[t["state"].isin(["forward", "backward"])]["node"].unique()
+    return sorted(int(j) + 1 for j in slipping)
+
+
+def _node_list(nodes) -> str:
+    nodes = [str(j) for j in nodes]
+    word = "node" if len(nodes) == 1 else "nodes"
+    return f"{word} {', '.join(nodes[:12])}" + (", ..." if len(nodes) > 12 else "")
+
+
+def cycles_verdict(run, lam: float, energy: str = "[force x length]", study=None) -> str:
+    """Plain sentences: shook down after k cycles / cyclic slip with W per cycle / no steady state.
+
+    Parameters
+    ----------
+    run : CycleRun
+    lam : float
+        Load factor of the run.
+    energy : str
+        Unit of energy (force x length) for ``W``.
+    study : UniquenessStudy, optional
+        Adds a sentence on whether the dissipation depends on the initial state.
+    """
+    at = f"At lam = {lam:.4g}"
+    if run.status == "periodic" and run.shook_down:
+        k = max(int(run.cycles_to_steady), 0)
+        when = "from the first cycle on" if k == 0 else f"after {k} cycle{'s' * (k != 1)}"
+        text = f"{at}, it shook down {when}: no node slips in the steady state (W = 0)."
+    elif run.status == "periodic":
+        slip = _slipping_nodes(run)
+        text = (f"{at}, cyclic slip: W = {run.steady_dissipation:.4g} {energy} per cycle, "
+                f"period {int(run.period)}"
+                + (f", {_node_list(slip)} slip" if slip else "") + ".")
+    elif run.status == "not_converged":
+        W = np.asarray(run.dissipation, float)
+        last = f" (last cycle: W = {W[-1]:.4g} {energy})" if W.size else ""
+        text = (f"{at}, it did not reach a steady state in {int(run.n_cycles)} cycles{last}; "
+                "raise max_cycles to go on.")
+    else:
+        text = f"{at}, the run stopped before a steady state: {run.message}"
+    if study is not None:
+        t = study.table
+        W = t["steady_dissipation"].to_numpy(float)
+        n = int(study.n_states)
+        if study.unique_dissipation:
+            text += (f" From {n} initial states the steady dissipation is the same "
+                     f"(spread {study.dissipation_spread:.3g} {energy}).")
+        elif np.isfinite(W).any():
+            text += (f" From {n} initial states the steady dissipation differs: W from "
+                     f"{np.nanmin(W):.4g} to {np.nanmax(W):.4g} {energy} per cycle "
+                     f"({study.fraction_shook_down:.0%} of them shook down); the initial state "
+                     "matters.")
+        else:
+            text += f" None of the {n} initial states reached a steady state."
+    return text
 
 
 def _plots(ctx, run, study, lam, options):

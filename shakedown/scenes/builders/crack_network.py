@@ -146,3 +146,22 @@ def build(model: dict, load: dict, scene_dir: Path):
     static = _stress("static", load.get("static", [-1.0, 0.0, -1.0]))
     cyclic = _stress("cyclic", load.get("cyclic", [0.0, 1.0, 0.0]))
     return net.system, net.load_cycle(static=static, cyclic=cyclic), net
+
+
+def resolved(model: dict, load: dict) -> tuple[dict, dict]:
+    """``[model]`` and ``[load]`` with every default that :func:`build` applies filled in."""
+    m, ld = dict(model), dict(load)
+    if "file" not in m:
+        for key, value in (("n_cracks", 100), ("density", 0.1), ("half_length", 1.0),
+                           ("min_spacing", 0.1), ("seed", 0)):
+            m.setdefault(key, value)
+    for key, value in (("shear_modulus", 1.0), ("poisson_ratio", 0.25), ("friction", 0.6),
+                       ("symmetric", True), ("method", "kachanov")):
+        m.setdefault(key, value)
+    if m["method"] == "kachanov":
+        m.setdefault("weighting", "uniform")
+    elif m["method"] == "bem":
+        m.setdefault("n_modes", 16)
+    ld.setdefault("static", [-1.0, 0.0, -1.0])
+    ld.setdefault("cyclic", [0.0, 1.0, 0.0])
+    return m, ld

@@ -142,6 +142,7 @@ def build(model: dict, load: dict, scene_dir: Path, cache_root: Path | None = No
     the scene runner) so that nothing is written outside it; without ``cache_root`` no cache is used.
     """
     from ...models import fe
+    from ..output import check_plain_name
 
     for key in model:
         if key not in MODEL_KEYS:
@@ -160,7 +161,8 @@ def build(model: dict, load: dict, scene_dir: Path, cache_root: Path | None = No
         )
         cache_dir = model.get("cache_dir")
         if cache_dir and cache_root is not None:
-            name = Path(str(cache_dir)).name  # a plain folder name inside the output folder
+            # a plain folder name inside the output folder ('..' would leave it)
+            name = check_plain_name(Path(str(cache_dir)).name, "[model] key 'cache_dir'")
             cache_path = Path(cache_root) / name
         else:
             cache_path = None

@@ -1,14 +1,33 @@
-"""Scene model kind ``"matrices"``: a system given by its blocks ``A``, ``B``, ``C``.
+"""Scene model kind ``"matrices"``: a system given by its blocks, from the scene or from files.
 
-``[model]`` keys
-    ``A``, ``B``, ``C`` : nested lists (N x N) [force / length], or
-    ``file`` : an ``.npz`` beside the scene with arrays ``A``, ``B``, ``C`` (and optionally
-    ``friction``); ``friction`` : number or list of N (overrides the file);
-    ``symmetry_rtol`` : number.
+``[model]`` keys (file names are relative to the scene's folder)
+    ``A``, ``B``, ``C`` : nested lists (N x N) [force / length]; or
+    ``file`` : an ``.npz`` or MATLAB ``.mat`` file holding ``A``, ``B``, ``C`` (or the reduced
+    ``K`` of shape 2N x 2N) and optionally ``friction``; or
+    ``K_file`` : the reduced stiffness ``K = [[A, B], [B^T, C]]`` (2N x 2N, order
+    ``v_1..v_N, w_1..w_N``) in any of ``.mtx``, ``.mat``, ``.npz``, ``.csv``; or
+    ``A_file``, ``B_file``, ``C_file`` : the blocks, each in any of those formats; or
+    ``stiffness_file`` : a *full* stiffness (every DOF of an FE model, e.g. an Abaqus, ANSYS
+    or Code_Aster export), condensed onto the contact nodes named by ``tangential_dofs`` and
+    ``normal_dofs`` (one DOF per contact node each, counted from ``dof_base``, default 1),
+    with ``fixed_dofs`` (supports, held at zero), ``tangential_sign`` and ``normal_sign``
+    (+1 or -1, or a list: +1 when the DOF points along MODEL.md's slip direction ``t`` /
+    the body's outward normal; see :mod:`shakedown.models.formats.stiffness`).
+    ``variables`` : table renaming the arrays read from ``.mat`` / ``.npz`` files, e.g.
+    ``{A = "Ktt", B = "Ktn", C = "Knn", K = "Kred", friction = "mu", stiffness = "KGLOB"}``.
+    ``friction`` : number or list of N (overrides the file's); ``symmetry_rtol`` : number.
 ``[load]`` keys
     ``q0``, ``p0`` : lists of N [force]; then either harmonics ``q_cos``, ``q_sin``, ``p_cos``,
     ``p_sin`` (lists of N or of lists of N) or samples ``q1``, ``p1`` (lists of lists of N);
-    or ``file`` : an ``.npz`` with the same names.
+    or ``file`` : an ``.npz`` / ``.mat`` with the same names; or
+    ``record_file`` : a measured CSV record (columns ``t, q_1, p_1, ..., q_N, p_N``) with
+    ``period`` (its time unit), ``n_samples`` (default 256), ``t_start`` (default: the first
+    time), ``max_error`` (default 0.01: accepted resampling error relative to the largest
+    reaction; see :mod:`shakedown.models.formats.records`);
+    with ``stiffness_file``: ``static_force`` and ``cyclic_force`` (``cyclic_sin_force``),
+    full-DOF force vectors (a list, or a file name: ``.mtx``, ``.csv``, or a ``.mat`` /
+    ``.npz`` array named after the key), giving ``r_w(t) = r_static + lam (r_cos cos 2 pi t
+    + r_sin sin 2 pi t)``.
 """
 
 from __future__ import annotations
@@ -20,23 +39,61 @@ import numpy as np
 from ...model.errors import InputError, SceneError
 from ...model.loading import LoadCycle
 from ...model.system import DiscreteSystem
+from ...models.formats import condense_stiffness, read_load_record, read_matrix, read_vector
+from ...models.formats.readers import container_names, read_array
 
-MODEL_KEYS = ("A", "B", "C", "file", "friction", "symmetry_rtol")
+STIFFNESS_KEYS = ("stiffness_file", "tangential_dofs", "normal_dofs", "fixed_dofs",
+                  "tangential_sign", "normal_sign", "dof_base")
+MODEL_KEYS = ("A", "B", "C", "file", "K_file", "A_file", "B_file", "C_file", *STIFFNESS_KEYS,
+              "variables", "friction", "symmetry_rtol")
 HARMONIC_KEYS = ("q_cos", "q_sin", "p_cos", "p_sin")
 SAMPLE_KEYS = ("q1", "p1")
-LOAD_KEYS = ("q0", "p0", "file", *HARMONIC_KEYS, *SAMPLE_KEYS)
+RECORD_KEYS = ("record_file", "period", "n_samples", "t_start", "max_error")
+FORCE_KEYS = ("static_force", "cyclic_force", "cyclic_sin_force")
+LOAD_KEYS = ("q0", "p0", "file", *HARMONIC_KEYS, *SAMPLE_KEYS, *RECORD_KEYS, *FORCE_KEYS)
+VARIABLE_NAMES = ("A", "B", "C", "K", "friction", "stiffness", *LOAD_KEYS[:2], *HARMONIC_KEYS,
+                  *SAMPLE_KEYS, *FORCE_KEYS)
 
 
-def _npz(path: Path, table: str) -> dict:
-    if path.suffix != ".npz":
-        raise SceneError(f"[{table}] key 'file' = {str(path)!r} must name an .npz file")
-    if not path.is_file():
-        raise SceneError(f"[{table}] key 'file' = {str(path)!r}: no such file")
-    with np.load(path, allow_pickle=False) as data:
-        return {k: np.array(data[k]) for k in data.files}
+def _variables(model: dict) -> dict:
+    names = model.get("variables", {})
+    if not isinstance(names, dict) or not all(isinstance(v, str) for v in names.values()):
+        raise SceneError('[model] key \'variables\' must be a table of names, e.g. '
+                         '{A = "Ktt", B = "Ktn", C = "Knn"}')
+    for key in names:
+        if key not in VARIABLE_NAMES:
+            raise SceneError(f"[model.variables] key {key!r} is not allowed; allowed: "
+                             f"{', '.join(VARIABLE_NAMES)}")
+    return names
+
+
+def _container(path: Path, table: str, names: dict) -> dict:
+    """Arrays of an ``.npz`` / ``.mat`` file (no pickles), renamed by ``names``."""
+    if path.suffix.lower() not in (".npz", ".mat"):
+        raise SceneError(f"[{table}] key 'file' = {path.name!r} must name an .npz or .mat file "
+                         "(one matrix per .mtx/.csv file: use K_file or A_file, B_file, C_file)")
+    present = container_names(path)
+    out = {key: read_array(path, names.get(key, key)) for key in VARIABLE_NAMES
+           if names.get(key, key) in present}
+    for key in ("friction", "q0", "p0"):  # MATLAB stores every vector and scalar as 2-D
+        if key in out and out[key].ndim == 2 and 1 in out[key].shape:
+            out[key] = out[key].ravel()
+            if key == "friction" and out[key].size == 1:
+                out[key] = out[key][0]
+    return out
 
 
 def _array(table, key, value):
+    bad = _not_a_number(value)
+    if bad is not None:
+        if isinstance(bad, str):
+            what, fix = f"the text {bad!r}", f"write {bad} without quotes"
+        else:
+            what, fix = f"the boolean {str(bad).lower()}", "write a number such as 0.7"
+        raise SceneError(
+            f"[{table}] key {key!r} must be a number or a (nested) list of numbers; got "
+            f"{what}, which is not a number ({fix})"
+        )
     try:
         arr = np.array(value, dtype=float)
     except (TypeError, ValueError):
@@ -46,6 +103,64 @@ def _array(table, key, value):
     return arr
 
 
+def _not_a_number(value):
+    """The first string or boolean inside ``value`` (TOML lists may nest), else None."""
+    if isinstance(value, (str, bool)):
+        return value
+    if isinstance(value, (list, tuple)):
+        for v in value:
+            bad = _not_a_number(v)
+            if bad is not None:
+                return bad
+    return None
+
+
+def _split(K: np.ndarray, where: str) -> dict:
+    if K.ndim != 2 or K.shape[0] != K.shape[1] or K.shape[0] % 2:
+        raise SceneError(f"{where}: the reduced stiffness K must be square of even size 2N "
+                         f"(order v_1..v_N, w_1..w_N); got shape {K.shape}")
+    n = K.shape[0] // 2
+    if not np.allclose(K[:n, n:], K[n:, :n].T, rtol=1e-8, atol=1e-8 * np.abs(K).max()):
+        raise SceneError(f"{where}: K is not symmetric (its B and B^T blocks differ)")
+    return {"A": K[:n, :n], "B": K[:n, n:], "C": K[n:, n:]}
+
+
+def _model_data(model: dict, scene_dir: Path):
+    names = _variables(model)
+    sources = [k for k in ("file", "K_file", "stiffness_file") if k in model]
+    if any(k in model for k in ("A_file", "B_file", "C_file")):
+        sources.append("A_file/B_file/C_file")
+    if len(sources) > 1:
+        raise SceneError(f"[model] give one source of the stiffness; got {', '.join(sources)}")
+    if "stiffness_file" not in model and any(k in model for k in STIFFNESS_KEYS):
+        raise SceneError("[model] keys " + ", ".join(k for k in STIFFNESS_KEYS if k in model)
+                         + " need 'stiffness_file'")
+    data, condensed = {}, None
+    if "file" in model:
+        data.update(_container(scene_dir / str(model["file"]), "model", names))
+        if "K" in data and "A" not in data:
+            data.update(_split(data.pop("K"), f"[model] file {model['file']!r}"))
+    if "K_file" in model:
+        K = read_matrix(scene_dir / str(model["K_file"]), names.get("K"))
+        data.update(_split(K, f"[model] K_file {model['K_file']!r}"))
+    for key in ("A", "B", "C"):
+        if f"{key}_file" in model:
+            data[key] = read_matrix(scene_dir / str(model[f"{key}_file"]), names.get(key))
+    if "stiffness_file" in model:
+        for key in ("tangential_dofs", "normal_dofs"):
+            if key not in model:
+                raise SceneError(f"[model] key {key!r} is missing (one DOF per contact node, "
+                                 "counted from dof_base = 1)")
+        Kfull = read_matrix(scene_dir / str(model["stiffness_file"]), names.get("stiffness"),
+                            sparse=True)
+        condensed = condense_stiffness(
+            Kfull, model["tangential_dofs"], model["normal_dofs"],
+            fixed_dofs=model.get("fixed_dofs", []), tangential_sign=model.get("tangential_sign", 1),
+            normal_sign=model.get("normal_sign", 1), dof_base=int(model.get("dof_base", 1)))
+        data.update(dict(zip("ABC", condensed.blocks, strict=True)))
+    return data, condensed
+
+
 def build(model: dict, load: dict, scene_dir: Path):
     for key in model:
         if key not in MODEL_KEYS:
@@ -53,15 +168,20 @@ def build(model: dict, load: dict, scene_dir: Path):
                 f"[model] key {key!r} is not allowed for kind 'matrices'; "
                 f"allowed: {', '.join(MODEL_KEYS)}"
             )
-    data = {}
-    if "file" in model:
-        data.update(_npz(scene_dir / str(model["file"]), "model"))
+    scene_dir = Path(scene_dir)
+    try:
+        data, condensed = _model_data(model, scene_dir)
+    except SceneError:
+        raise
+    except InputError as exc:
+        raise SceneError(f"[model] {exc}") from None
     for key in ("A", "B", "C", "friction"):
         if key in model:
             data[key] = _array("model", key, model[key])
     for key in ("A", "C"):
         if key not in data:
-            raise SceneError(f"[model] key {key!r} is missing (an N x N list, or give 'file')")
+            raise SceneError(f"[model] key {key!r} is missing (an N x N list, or give 'file', "
+                             "'K_file', 'A_file'/'C_file' or 'stiffness_file')")
     if "B" not in data:
         data["B"] = np.zeros_like(data["A"])
     if "friction" not in data:
@@ -73,45 +193,117 @@ def build(model: dict, load: dict, scene_dir: Path):
         system = DiscreteSystem(data["A"], data["B"], data["C"], data["friction"], **kwargs)
     except InputError as exc:
         raise SceneError(f"[model] {exc}") from None
-    return system, build_load(load, scene_dir, system.n_nodes), None
+    names = _variables(model)
+    return system, build_load(load, scene_dir, system.n_nodes, condensed, names), condensed
 
 
-def build_load(load: dict, scene_dir: Path, n: int) -> LoadCycle:
+def _force(load: dict, key: str, scene_dir: Path, names: dict):
+    value = load[key]
+    if isinstance(value, str):
+        return read_vector(scene_dir / value, names.get(key, key)
+                           if Path(value).suffix.lower() in (".npz", ".mat") else None)
+    return _array("load", key, value)
+
+
+def _full_load(load: dict, scene_dir: Path, condensed, names: dict) -> LoadCycle:
+    other = [k for k in load if k not in FORCE_KEYS]
+    if other:
+        raise SceneError(f"[load] with 'stiffness_file' takes {', '.join(FORCE_KEYS)} (full-DOF "
+                         f"force vectors); not {', '.join(other)}")
+    welded = {}
+    for key in FORCE_KEYS:
+        if key in load:
+            welded[key] = condensed.welded(_force(load, key, scene_dir, names))
+    n = condensed.n_nodes
+    q0, p0 = welded.get("static_force", (np.zeros(n), np.zeros(n)))
+    kw = {}
+    if "cyclic_force" in welded:
+        kw.update(q_cos=welded["cyclic_force"][0], p_cos=welded["cyclic_force"][1])
+    if "cyclic_sin_force" in welded:
+        kw.update(q_sin=welded["cyclic_sin_force"][0], p_sin=welded["cyclic_sin_force"][1])
+    return LoadCycle.from_harmonics(q0, p0, **kw)
+
+
+def build_load(load: dict, scene_dir: Path, n: int, condensed=None, names=None) -> LoadCycle:
     for key in load:
         if key not in LOAD_KEYS:
             raise SceneError(
                 f"[load] key {key!r} is not allowed for kind 'matrices'; "
                 f"allowed: {', '.join(LOAD_KEYS)}"
             )
-    data = {}
-    if "file" in load:
-        data.update(_npz(scene_dir / str(load["file"]), "load"))
-    for key in LOAD_KEYS[:1] + LOAD_KEYS[1:2] + HARMONIC_KEYS + SAMPLE_KEYS:
-        if key in load:
-            data[key] = _array("load", key, load[key])
-    for key in ("q0", "p0"):
-        if key not in data:
-            raise SceneError(f"[load] key {key!r} is missing (a list of {n} numbers)")
-    harm = [k for k in HARMONIC_KEYS if k in data]
-    samp = [k for k in SAMPLE_KEYS if k in data]
+    names = names or {}
     try:
-        if harm and samp:
-            raise SceneError(
-                f"[load] give either harmonics ({', '.join(HARMONIC_KEYS)}) or samples "
-                f"(q1, p1), not both; got {harm + samp}"
-            )
-        if samp:
-            if len(samp) != 2:
-                raise SceneError("[load] samples need both 'q1' and 'p1' (n_samples x N lists)")
-            cycle = LoadCycle.from_samples(data["q0"], data["p0"], data["q1"], data["p1"])
+        if condensed is not None:
+            cycle = _full_load(load, Path(scene_dir), condensed, names)
+        elif any(k in load for k in FORCE_KEYS):
+            raise SceneError(f"[load] keys {', '.join(FORCE_KEYS)} need [model] 'stiffness_file'")
+        elif "record_file" in load:
+            cycle = _record(load, Path(scene_dir))
         else:
-            cycle = LoadCycle.from_harmonics(
-                data["q0"], data["p0"], **{k: data[k] for k in harm}
-            )
+            cycle = _reactions(load, Path(scene_dir), n, names)
     except SceneError:
         raise
     except InputError as exc:
         raise SceneError(f"[load] {exc}") from None
     if cycle.n_nodes != n:
-        raise SceneError(f"[load] key 'q0' has {cycle.n_nodes} entries but the model has {n} nodes")
+        raise SceneError(f"[load] gives {cycle.n_nodes} nodes but the model has {n} nodes")
     return cycle
+
+
+def _record(load: dict, scene_dir: Path) -> LoadCycle:
+    other = [k for k in load if k not in RECORD_KEYS]
+    if other:
+        raise SceneError(f"[load] 'record_file' takes {', '.join(RECORD_KEYS)}; not "
+                         f"{', '.join(other)}")
+    if "period" not in load:
+        raise SceneError("[load] key 'period' is missing (the loading period, in the record's "
+                         "time unit)")
+    kw = {k: load[k] for k in ("n_samples", "t_start", "max_error") if k in load}
+    cycle, _ = read_load_record(scene_dir / str(load["record_file"]), load["period"], **kw)
+    return cycle
+
+
+def _reactions(load: dict, scene_dir: Path, n: int, names: dict) -> LoadCycle:
+    if any(k in load for k in RECORD_KEYS):
+        raise SceneError("[load] keys " + ", ".join(k for k in RECORD_KEYS if k in load)
+                         + " need 'record_file'")
+    data = {}
+    if "file" in load:
+        data.update(_container(scene_dir / str(load["file"]), "load", names))
+    for key in ("q0", "p0", *HARMONIC_KEYS, *SAMPLE_KEYS):
+        if key in load:
+            data[key] = _array("load", key, load[key])
+    for key in ("q0", "p0"):
+        if key not in data:
+            raise SceneError(f"[load] key {key!r} is missing (a list of {n} numbers)")
+        if data[key].shape != (n,):
+            raise SceneError(
+                f"[load] key {key!r} must list one value per node ({n} nodes); got "
+                f"{data[key].tolist()!r} (shape {data[key].shape})"
+            )
+    harm = [k for k in HARMONIC_KEYS if k in data]
+    samp = [k for k in SAMPLE_KEYS if k in data]
+    if harm and samp:
+        raise SceneError(
+            f"[load] give either harmonics ({', '.join(HARMONIC_KEYS)}) or samples "
+            f"(q1, p1), not both; got {harm + samp}"
+        )
+    if samp:
+        if len(samp) != 2:
+            raise SceneError("[load] samples need both 'q1' and 'p1' (n_samples x N lists)")
+        return LoadCycle.from_samples(data["q0"], data["p0"], data["q1"], data["p1"])
+    return LoadCycle.from_harmonics(data["q0"], data["p0"], **{k: data[k] for k in harm})
+
+
+def resolved(model: dict, load: dict) -> tuple[dict, dict]:
+    """``[model]`` and ``[load]`` with the defaults :func:`build` applies filled in."""
+    m, ld = dict(model), dict(load)
+    if "stiffness_file" in m:
+        m.setdefault("fixed_dofs", [])
+        m.setdefault("tangential_sign", 1)
+        m.setdefault("normal_sign", 1)
+        m.setdefault("dof_base", 1)
+    if "record_file" in ld:
+        ld.setdefault("n_samples", 256)
+        ld.setdefault("max_error", 1e-2)
+    return m, ld

@@ -1,0 +1,425 @@
+"""Cost of the implicit step and of cyclic runs (issues 13/14), side by side with the baseline.
+
+Usage::
+
+    python benchmarks/bench_step.py --baseline /tmp/step-base [--parts scaling,warm,rows,siconos,big]
+
+``--baseline`` is a checkout of the code to compare with (``git worktree add /tmp/step-base
+af73457``: the code before this work); each side runs in its own subprocess (``PYTHONPATH`` set
+to its tree, ``OPENBLAS_NUM_THREADS=1``) on the same problems, pickled once.  Problems: the
+default scene's crack networks (``shakedown/scenes/builtin/default.toml``: Kachanov, density 0.1,
+friction 0.6, far field S0 = {-1, 0, -1}, S1 = {0, 1, 0}) with ``N`` cracks, realisation 0.
+
+Parts
+-----
+scaling  per-step cost of ``solve_cycles`` (implicit, 64 steps per period, 2 periods from the
+         zero state, lam = 0.8) against N = 100 .. 2000; log-log slopes; ``step_scaling.png``.
+warm     a warm step (the guess is the answer, its factor cached) against one pair of
+         triangular solves with the cached factor (LAPACK getrs), N = 100 and 1000.
+rows     per run of the default study (12 load factors from 0.5 lam1 to 2 lam2, 4 initial
+         states, ``shakedown.studies.sweep.run_row``): baseline, this code one run at a time,
+         this code with the 4 states of each load factor together.
+siconos  the steps of one steady period at N = 100 (lam = 0.8) solved by Siconos FC2D NSGS
+         (``benchmarks/siconos_fc2d_worker.py`` under ``/usr/bin/python3``, tolerance 1e-14,
+         warm-started from the previous step) against this code's steps; the answers compared.
+big      the 1000-crack realisation: Kachanov assembly, bounds, 4 initial states to the steady
+         state at 64 steps per period (one process, one BLAS thread).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import pickle
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+CACHE = Path(tempfile.gettempdir()) / "shakedown_bench_step"
+KW = dict(method="implicit", steps_per_cycle=64, tol=1e-10)
+
+
+# ---------------------------------------------------------------------------- problems
+def problem(n: int) -> Path:
+    """Pickle ``(A, B, C, friction, load, slips[4])`` of the default scene with n cracks."""
+    path = CACHE / f"cracks_{n}.pkl"
+    if path.exists():
+        return path
+    CACHE.mkdir(exist_ok=True)
+    from shakedown.scenes.files import tomllib
+    from shakedown.studies.sweep import SweepSpec, initial_slip, realisation_model
+
+    raw = tomllib.loads((ROOT / "shakedown/scenes/builtin/default.toml").read_text())
+    model = {k: v for k, v in raw["model"].items() if k != "kind"}
+    model["n_cracks"] = n
+    spec = SweepSpec.from_scene(model, raw["load"], raw["analyses"]["sweep"])
+    _, m, load = realisation_model(spec, 0)
+    s = m.system
+    slips = np.array([initial_slip(s, load, j, (spec.seed, 0, 1), scale=spec.state_scale)
+                      for j in range(4)])
+    path.write_bytes(pickle.dumps((s.A, s.B, s.C, s.friction, load, slips)))
+    return path
+
+
+def load_problem(path):
+    import shakedown as sd
+
+    A, B, C, f, load, slips = pickle.loads(Path(path).read_bytes())
+    return sd.DiscreteSystem(A, B, C, friction=f), load, slips
+
+
+# ---------------------------------------------------------------------------- workers
+def worker_steps(a):
+    import shakedown as sd
+    from shakedown.evolution.complementarity import StepSolver
+
+    s, load, _ = load_problem(a.pkl)
+    s.critical_friction()  # once per system (cached in this code; warmed for both sides)
+    out = []
+    for _ in range(a.repeat):
+        solver = StepSolver(s)
+        solver.critical  # noqa: B018  (computed outside the timed region on both sides)
+        t = time.perf_counter()
+        run = sd.solve_cycles(s, load, a.lam, max_cycles=a.cycles, solver=solver, **KW)
+        out.append((time.perf_counter() - t) / run.statistics["n_steps"])
+    return dict(per_step=out, n_steps=run.statistics["n_steps"],
+                factorizations=run.statistics["factorizations"], W=run.dissipation.tolist())
+
+
+def worker_rows(a):
+    from shakedown.studies.sweep import run_row
+
+    s, load, slips = load_problem(a.pkl)
+    lams = json.loads(a.lams)
+    opts = dict(KW, max_cycles=200)
+    walls, Ws = [], None
+    for _ in range(a.repeat):
+        s2, _, _ = load_problem(a.pkl)  # a fresh system: nothing cached from the last repeat
+        t = time.perf_counter()
+        if a.batched:
+            import shakedown as sd
+
+            Ws = []
+            for lam in lams:
+                runs = sd.solve_cycles(s2, load, lam, initial_slip=slips, max_cycles=200, **KW)
+                Ws += [r.steady_dissipation for r in runs]
+        else:
+            Ws = [run_row(s2, load, lam, v, opts)["W"] for lam in lams for v in slips]
+        walls.append(time.perf_counter() - t)
+    return dict(per_run=[w / len(Ws) for w in walls], W=Ws)
+
+
+def worker_warm(a):
+    import shakedown as sd
+    from shakedown.evolution.complementarity import StepSolver
+
+    s, load, _ = load_problem(a.pkl)
+    solver = StepSolver(s)
+    run = sd.solve_cycles(s, load, a.lam, max_cycles=200, solver=solver, record_history=True,
+                          **KW)
+    n = s.n_nodes
+    qg, pg = load.evaluate(np.arange(1, 65) / 64, a.lam)
+    acts = run.final_active_sets
+    m = [np.count_nonzero(x != 0) + np.count_nonzero(x == 3) for x in acts]
+    k = int(np.argmax(m))  # the step of the steady period with the largest system
+    tab = run.history
+    last = tab[tab["t"] == tab["t"].max() - 1 + k / 64].drop_duplicates("node", keep="last")
+    last = last.sort_values("node")
+    v = last["slip"].to_numpy(float)
+    assert v.shape == (n,)
+    q_w, p_w, guess = qg[k], pg[k], acts[k]
+    for _ in range(3):
+        r = solver.solve(v, q_w, p_w, guess)
+    reps = max(20, int(2e8 / max(n * n * 20, 1)))
+
+    def med(fn):
+        ts = []
+        for _ in range(5):
+            t = time.perf_counter()
+            for _ in range(reps):
+                fn()
+            ts.append((time.perf_counter() - t) / reps)
+        return statistics.median(ts)
+
+    res = dict(m=int(m[k]), n=n, step=med(lambda: solver.solve(v, q_w, p_w, guess)),
+               iterations=int(r.iterations), factorizations=int(r.factorizations))
+    F = solver._cache.get(guess.tobytes())
+    if F is not None:  # this code and the baseline keep the LU the same way
+        import scipy.linalg as sla
+        from scipy.linalg import get_lapack_funcs
+
+        getrs = get_lapack_funcs("getrs", (s.K,))
+        rhs = np.random.default_rng(0).normal(size=F.free.size)
+        res["getrs"] = med(lambda: getrs(F.lu[0], F.lu[1], rhs))
+        res["lu_solve"] = med(lambda: sla.lu_solve(F.lu, rhs, check_finite=False))
+        if hasattr(solver, "next_base"):
+            base = (q_w + s.A @ v, p_w + s.B.T @ v)
+            res["step_warm_base"] = med(lambda: solver.solve(v, q_w, p_w, guess, base=base,
+                                                             verify=False))
+    return res
+
+
+def worker_siconos_problems(a):
+    """Our steps of one steady period, and the FC2D problems of the same steps (to .npz)."""
+    import shakedown as sd
+    from shakedown.evolution.complementarity import StepSolver
+
+    s, load, _ = load_problem(a.pkl)
+    n = s.n_nodes
+    solver = StepSolver(s)
+    run = sd.solve_cycles(s, load, a.lam, max_cycles=200, solver=solver, record_history=True,
+                          **KW)
+    tab = run.steady_table.sort_values(["t", "node"])
+    V = tab["slip"].to_numpy(float).reshape(-1, n)  # row 0: start of the orbit
+    qg, pg = load.evaluate(np.arange(1, 65) / 64, a.lam)
+    acts = run.final_active_sets
+    guesses = np.vstack([acts[-1:], acts[:-1]])
+    ts, res = [], []
+    for _ in range(3):
+        t = time.perf_counter()
+        res = [solver.solve(V[k], qg[k], pg[k], guesses[k]) for k in range(64)]
+        ts.append((time.perf_counter() - t) / 64)
+    G = np.linalg.inv(s.K)
+    perm = np.ravel(np.column_stack([n + np.arange(n), np.arange(n)]))  # (normal, tangential)
+    M = G[np.ix_(perm, perm)]
+    Q = np.array([-(G @ np.concatenate([qg[k] + s.A @ V[k], pg[k] + s.B.T @ V[k]]))[perm]
+                  for k in range(64)])
+    np.savez(a.out, M=M, Q=Q, mu=s.friction, q=np.array([r.q for r in res]),
+             p=np.array([r.p for r in res]), dv=np.array([r.slip_increment for r in res]),
+             w=np.array([r.gap for r in res]), scale=np.array([r.force_scale for r in res]),
+             diag=np.diag(s.K))
+    return dict(per_step=ts)
+
+
+WORKERS = dict(steps=worker_steps, rows=worker_rows, warm=worker_warm,
+               siconos_problems=worker_siconos_problems)
+
+
+def run_worker(tree, task, **kw):
+    env = dict(os.environ, PYTHONPATH=str(tree), OPENBLAS_NUM_THREADS="1",
+               OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
+    cmd = [sys.executable, str(Path(__file__).resolve()), "--worker", task]
+    for k, v in kw.items():
+        if v is True:
+            cmd.append(f"--{k}")
+        elif v is not False and v is not None:
+            cmd += [f"--{k}", str(v)]
+    out = subprocess.run(cmd, env=env, capture_output=True, text=True, check=False)
+    if out.returncode:
+        raise RuntimeError(f"{task} in {tree} failed:\n{out.stderr[-3000:]}")
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+# ---------------------------------------------------------------------------- parts
+def med(x):
+    return statistics.median(x)
+
+
+def part_scaling(base, ns, lines):
+    lines += ["## Per-step cost against N (crack networks, lam = 0.8, 64 steps per period, "
+              "2 periods, medians of 3)", "",
+              "| N | baseline ms/step | this ms/step | speed-up | LU factorizations (base / this) |",
+              "| --- | --- | --- | --- | --- |"]
+    rows = []
+    for n in ns:
+        pk = problem(n)
+        kw = dict(pkl=pk, lam=0.8, cycles=2, repeat=3)
+        b = run_worker(base, "steps", **kw)
+        t = run_worker(ROOT, "steps", **kw)
+        assert np.allclose(b["W"], t["W"], rtol=1e-8), (b["W"], t["W"])
+        rows.append((n, med(b["per_step"]), med(t["per_step"])))
+        lines.append(f"| {n} | {1e3 * rows[-1][1]:.3g} | {1e3 * rows[-1][2]:.3g} | "
+                     f"{rows[-1][1] / rows[-1][2]:.1f}x | {b['factorizations']} / "
+                     f"{t['factorizations']} |")
+        print(lines[-1], flush=True)
+    N = np.array([r[0] for r in rows], float)
+    tb, tt = np.array([r[1] for r in rows]), np.array([r[2] for r in rows])
+    sel = N >= 400
+    if sel.sum() >= 2:
+        sb = np.polyfit(np.log(N[sel]), np.log(tb[sel]), 1)[0]
+        st = np.polyfit(np.log(N[sel]), np.log(tt[sel]), 1)[0]
+        lines += ["", f"Log-log slope of the per-step cost for N >= 400: baseline {sb:.2f}, "
+                  f"this code {st:.2f}."]
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        fig, ax = plt.subplots(figsize=(5, 4))
+        ax.loglog(N, 1e3 * tb, "o-", label="baseline (af73457)")
+        ax.loglog(N, 1e3 * tt, "s-", label="this code")
+        ax.set_xlabel("N (contact nodes)")
+        ax.set_ylabel("ms per step")
+        ax.set_title("implicit step, crack networks" + (f"; slope N>=400: {st:.2f}"
+                                                         if sel.sum() >= 2 else ""))
+        ax.legend()
+        fig.tight_layout()
+        fig.savefig(HERE / "step_scaling.png", dpi=120)
+        lines += ["", "![scaling](step_scaling.png)"]
+    except ImportError:
+        pass
+    lines.append("")
+
+
+def part_warm(base, lines):
+    lines += ["## Warm step against one triangular-solve pair with the cached factor "
+              "(lam = 0.8, the steady period's largest system, medians of 5)", "",
+              "| N | m (unknowns) | getrs us | baseline step us | this step us | this step, "
+              "base given, us | this step / getrs |", "| --- | --- | --- | --- | --- | --- | --- |"]
+    for n in (100, 1000):
+        pk = problem(n)
+        b = run_worker(base, "warm", pkl=pk, lam=0.8)
+        t = run_worker(ROOT, "warm", pkl=pk, lam=0.8)
+        lines.append(f"| {n} | {t['m']} | {1e6 * t['getrs']:.1f} | {1e6 * b['step']:.1f} | "
+                     f"{1e6 * t['step']:.1f} | {1e6 * t['step_warm_base']:.1f} | "
+                     f"{t['step'] / t['getrs']:.1f} ({t['step_warm_base'] / t['getrs']:.1f} "
+                     "with the base) |")
+        print(lines[-1], flush=True)
+    lines.append("")
+
+
+def part_rows(base, lines):
+    pk = problem(100)
+    from shakedown.bounds.engine import shakedown_bounds
+
+    s, load, _ = load_problem(pk)
+    b = shakedown_bounds(s, load)
+    lams = np.linspace(0.5 * b.lam1, 2 * b.lam2, 12).tolist()
+    kw = dict(pkl=pk, lams=json.dumps(lams), repeat=3)
+    rb = run_worker(base, "rows", **kw)
+    rt = run_worker(ROOT, "rows", **kw)
+    rbt = run_worker(ROOT, "rows", batched=True, **kw)
+    Wb, Wt, Wbt = (np.array(r["W"]) for r in (rb, rt, rbt))
+    scale = np.nanmax(np.abs(Wb))
+    lines += [f"## Per run of the default study (100 cracks, lam1 = {b.lam1:.4f}, "
+              f"lam2 = {b.lam2:.4f}, 12 load factors x 4 initial states, medians of 3)", "",
+              "| code | s per run | speed-up |", "| --- | --- | --- |",
+              f"| baseline run_row | {med(rb['per_run']):.4f} | 1 |",
+              f"| this run_row | {med(rt['per_run']):.4f} | "
+              f"{med(rb['per_run']) / med(rt['per_run']):.1f}x |",
+              f"| this, 4 states together | {med(rbt['per_run']):.4f} | "
+              f"{med(rb['per_run']) / med(rbt['per_run']):.1f}x |", "",
+              f"Largest |W difference| / max W: this {np.nanmax(np.abs(Wt - Wb)) / scale:.1e}, "
+              f"batched {np.nanmax(np.abs(Wbt - Wb)) / scale:.1e}.", ""]
+    print("\n".join(lines[-9:]), flush=True)
+
+
+def part_siconos(lines):
+    if subprocess.run(["/usr/bin/python3", "-c", "import siconos.numerics"],
+                      capture_output=True, check=False).returncode:
+        lines += ["## Siconos FC2D NSGS: skipped (`/usr/bin/python3 -c 'import "
+                  "siconos.numerics'` fails; `apt-get install python3-siconos`)", ""]
+        return
+    pk = problem(100)
+    with tempfile.TemporaryDirectory() as tmp:
+        pin, pout = Path(tmp) / "in.npz", Path(tmp) / "out.npz"
+        ours = run_worker(ROOT, "siconos_problems", pkl=pk, lam=0.8, out=pin)
+        ts = []
+        for _ in range(3):
+            subprocess.run(["/usr/bin/python3", str(HERE / "siconos_fc2d_worker.py"), str(pin),
+                            str(pout), "--warm"], check=True)
+            o = np.load(pout)
+            ts.append(float(np.mean(o["time"])))
+        d = np.load(pin)
+        n = d["q"].shape[1]
+        r, u = o["r"], o["u"]
+        dp = np.abs(r[:, 0::2] - d["p"]).max(axis=1) / d["scale"]
+        dq = np.abs(r[:, 1::2] - d["q"]).max(axis=1) / d["scale"]
+        ds = (np.abs(u[:, 1::2] - d["dv"]) * d["diag"][:n]).max(axis=1) / d["scale"]
+        worst = float(max(dp.max(), dq.max(), ds.max()))
+        lines += ["## Siconos FC2D NSGS on the same steps (N = 100, one steady period, "
+                  "64 steps, medians of 3)", "",
+                  "| solver | us per step | ratio |", "| --- | --- | --- |",
+                  f"| Siconos FC2D NSGS (tol 1e-14, warm start, driver call only) | "
+                  f"{1e6 * med(ts):.0f} | {med(ts) / med(ours['per_step']):.1f}x |",
+                  f"| this code (StepSolver.solve, warm guess, full verification) | "
+                  f"{1e6 * med(ours['per_step']):.0f} | 1 |", "",
+                  f"Siconos converged on {int(np.sum(o['info'] == 0))}/64 steps, "
+                  f"{float(np.median(o['iters'])):.0f} NSGS sweeps (median). Largest "
+                  f"difference of p, q (/ force scale) and of slips (x K_jj / force scale): "
+                  f"{worst:.1e}.", ""]
+        print("\n".join(lines[-8:]), flush=True)
+
+
+def part_big(lines):
+    import crack_networks  # noqa: F401  (import time outside the measurement)
+    import shakedown as sd
+    from shakedown.bounds.engine import shakedown_bounds
+
+    t0 = time.perf_counter()
+    pk = CACHE / "cracks_1000.pkl"
+    if pk.exists():
+        pk.unlink()
+    problem(1000)
+    t1 = time.perf_counter()
+    s, load, slips = load_problem(pk)
+    t2 = time.perf_counter()
+    b = shakedown_bounds(s, load)
+    t3 = time.perf_counter()
+    lam = float(0.5 * (b.lam1 + b.lam2)) if np.isfinite(b.lam2) else 0.8
+    runs = sd.solve_cycles(s, load, lam, initial_slip=slips, max_cycles=200, **KW)
+    t4 = time.perf_counter()
+    lines += ["## The 1000-crack realisation (one process, one BLAS thread)", "",
+              "| phase | s |", "| --- | --- |",
+              f"| Kachanov assembly and initial states | {t1 - t0:.1f} |",
+              f"| DiscreteSystem checks | {t2 - t1:.1f} |",
+              f"| bounds (lam1 = {b.lam1:.4f}, lam2 = {b.lam2:.4f}) | {t3 - t2:.1f} |",
+              f"| 4 states to the steady state at lam = {lam:.4f} (periods: "
+              f"{', '.join(str(r.n_cycles) for r in runs)}) | {t4 - t3:.1f} |",
+              f"| total | {t4 - t0:.1f} |", ""]
+    print("\n".join(lines[-9:]), flush=True)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--baseline", default="/tmp/step-base")
+    ap.add_argument("--parts", default="scaling,warm,rows,siconos,big")
+    ap.add_argument("--ns", default="100,200,400,1000,2000")
+    ap.add_argument("--out", default=str(HERE / "RESULTS_step.md"))
+    ap.add_argument("--worker")
+    for k in ("pkl", "lam", "cycles", "repeat", "lams"):
+        ap.add_argument(f"--{k}")
+    ap.add_argument("--batched", action="store_true")
+    a, _ = ap.parse_known_args()
+    if a.worker:
+        a.lam = None if a.lam is None else float(a.lam)
+        a.cycles = None if a.cycles is None else int(a.cycles)
+        a.repeat = None if a.repeat is None else int(a.repeat)
+        print(json.dumps(WORKERS[a.worker](a)))
+        return
+    parts = a.parts.split(",")
+    load_avg = os.getloadavg()
+    lines = ["# Step solver benchmarks (issues 13/14)", "",
+             f"Command: `python benchmarks/bench_step.py --baseline {a.baseline} --parts "
+             f"{a.parts}`  ", f"Machine: {os.cpu_count()} cores, Python "
+             f"{sys.version.split()[0]}, numpy {np.__version__}, one BLAS thread per process; "
+             f"load average at the start {load_avg[0]:.1f} / {load_avg[1]:.1f} / "
+             f"{load_avg[2]:.1f} (a shared machine: the ratios measured side by side count, "
+             "not the absolute times).", ""]
+    if "scaling" in parts:
+        part_scaling(a.baseline, [int(x) for x in a.ns.split(",")], lines)
+    if "warm" in parts:
+        part_warm(a.baseline, lines)
+    if "rows" in parts:
+        part_rows(a.baseline, lines)
+    if "siconos" in parts:
+        part_siconos(lines)
+    if "big" in parts:
+        part_big(lines)
+    la = os.getloadavg()
+    lines.append(f"Load average at the end: {la[0]:.1f} / {la[1]:.1f} / {la[2]:.1f}.")
+    Path(a.out).write_text("\n".join(lines) + "\n")
+    print(f"wrote {a.out}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,151 @@
+"""The active-set iteration of the step and rate problems (MODEL.md s.4).
+
+The guess is the previous step's assignment; after each solve the nodes whose signs are
+violated switch state (all at once; on a repeated assignment one at a time, the most violated
+first; on a second repetition, a singular matrix or an exhausted iteration budget, a pivoting
+fallback of :mod:`.fallbacks` takes over).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .step_types import BACKWARD, FORWARD, SEPARATED, STICK, MixedSolution
+
+
+class ActiveSet:
+    """Mixin of :class:`~.complementarity.StepSolver`: sign checks and the active-set loop."""
+
+    # ------------------------------------------------------------------ sign checks
+    def _violations(self, s, z, q, p, allowed, forced, ft, dtol):
+        """Normalised violation (> 1: violated) and target state per node."""
+        n = self.n
+        dv, w = z[:n], z[n:]
+        f = self.f
+        sp, sm = f * p + q, f * p - q
+        cand = np.full((n, 4), -np.inf)  # magnitude of the violation that points to state k
+        dvt, dwt = dtol[:n], dtol[n:]
+        isS, isF, isB, isO = (s == STICK), (s == FORWARD), (s == BACKWARD), (s == SEPARATED)
+        cand[:, SEPARATED] = np.where(~isO & allowed[:, SEPARATED], -p / ft, -np.inf)
+        cand[:, FORWARD] = np.where(isS & allowed[:, FORWARD], -sp / ft, -np.inf)
+        cand[:, BACKWARD] = np.where(isS & allowed[:, BACKWARD], -sm / ft, -np.inf)
+        back = np.where(isF, -dv / dvt, np.where(isB, dv / dvt, np.where(isO, -w / dwt, -np.inf)))
+        cand[:, STICK] = np.where(allowed[:, STICK], back, -np.inf)
+        cand[forced] = -np.inf
+        target = np.argmax(cand, axis=1).astype(np.int8)
+        mag = cand[np.arange(n), target]
+        return mag, target
+
+    def _violations_step(self, s, z, q, p, ft, dtol):
+        """:meth:`_violations` of the step problem (every state allowed, no node held), with
+        one (4, N) array and no per-state masks: ``None`` when no sign is violated."""
+        n = self.n
+        fp = self.f * p
+        cand = np.empty((4, n))
+        np.divide(p, -ft, out=cand[SEPARATED])
+        np.add(fp, q, out=cand[FORWARD])
+        cand[FORWARD] /= -ft
+        np.subtract(q, fp, out=cand[BACKWARD])
+        cand[BACKWARD] /= ft
+        np.divide(z[:n], dtol[:n], out=cand[STICK])
+        isS = s == STICK
+        isO = s == SEPARATED
+        cand[STICK][s == FORWARD] *= -1.0
+        cand[STICK][isO] = -z[n:][isO] / dtol[n:][isO]
+        cand[STICK][isS] = -np.inf
+        cand[FORWARD:SEPARATED, ~isS] = -np.inf
+        cand[SEPARATED][isO] = -np.inf
+        if cand.max() <= 1.0:
+            return None
+        target = np.argmax(cand, axis=0).astype(np.int8)
+        return cand[target, np.arange(n)], target
+
+    def residuals(self, z, q, p, allowed, forced, scale):
+        """Natural complementarity residual of an answer (dimensionless; see StepResult).
+
+        ``allowed=None`` / ``forced=None``: the step problem (every state allowed).
+        """
+        n = self.n
+        dv, w = z[:n], z[n:]
+        f = self.f
+        ds = scale / self.diag
+        xs = (w / ds[n:], np.maximum(dv, 0) / ds[:n], np.maximum(-dv, 0) / ds[:n])
+        fp = f * p
+        ys = (p / scale, (fp + q) / scale, (fp - q) / scale)
+        if allowed is None:
+            return float(np.abs(np.minimum(np.concatenate(xs), np.concatenate(ys))).max())
+        res = 0.0
+        free_nodes = ~forced
+        for k, (x, y) in enumerate(zip(xs, ys, strict=True)):
+            state = (SEPARATED, FORWARD, BACKWARD)[k]
+            m = free_nodes & allowed[:, state]
+            if np.any(m):
+                res = max(res, float(np.abs(np.minimum(x[m], y[m])).max()))
+            m2 = free_nodes & ~allowed[:, state]  # variable absent: must be zero
+            if np.any(m2):
+                res = max(res, float(np.abs(x[m2]).max()))
+        fo = forced & allowed[:, SEPARATED]
+        if np.any(fo):
+            res = max(res, float(np.abs(np.concatenate([q[fo], p[fo]])).max() / scale))
+        return res
+
+    # ------------------------------------------------------------------ the mixed problem
+    def solve_mixed(self, q0, p0, allowed=None, guess=None, scale=None) -> MixedSolution:
+        """Solve the step (or rate) problem with base reactions ``(q0, p0)`` at ``z = 0``.
+
+        ``allowed`` (N, 4) bool: the states each node may take (rows with a single ``True`` are
+        held in that state with no sign check: the interior nodes of a rate problem).
+        """
+        n = self.n
+        step = allowed is None
+        allowed = self._all_allowed if step else np.asarray(allowed, bool)
+        forced = self._none_forced if step else allowed.sum(axis=1) == 1
+        if scale is None:
+            scale = float(max(np.abs(q0).max(initial=0), np.abs(p0).max(initial=0)))
+        scale = scale if scale > 0 else 1.0
+        ft = self.feas_tol * scale
+        dtol = ft / self.diag
+        s = np.zeros(n, np.int8) if guess is None else np.array(guess, np.int8)
+        if not step:
+            bad = ~allowed[np.arange(n), s]
+            s[bad] = np.argmax(allowed[bad], axis=1)
+        self._counters = dict(factorizations=0, updates=0, cache_hits=0)
+        visited = set()
+        single = False
+        it = 0
+        while it < self.max_iter:
+            it += 1
+            key = s.tobytes()
+            if key in visited:
+                if single:
+                    break
+                single, visited = True, set()
+            visited.add(key)
+            z = self._solve_set(s, q0, p0, scale)
+            if z is None:
+                break
+            q, p = self._reactions(z, q0, p0, self._last_factor)
+            if step:
+                viol = self._violations_step(s, z, q, p, ft, dtol)
+            else:
+                viol = self._violations(s, z, q, p, allowed, forced, ft, dtol)
+                if viol[0].max(initial=-np.inf) <= 1.0:
+                    viol = None
+            if viol is None:
+                self._remember(s, key)
+                self.totals["iterations"] += it
+                return MixedSolution(s, z, q, p, True, "active_set", it, 0, self._counters)
+            mag, target = viol
+            idx = np.flatnonzero(mag > 1.0) if not single else [int(np.argmax(mag))]
+            s = s.copy()
+            s[idx] = target[idx]
+        self.totals["iterations"] += it
+        if not np.any(forced) and np.all(allowed):
+            sol = self._lemke_flexibility(q0, p0, scale)
+        else:
+            free = np.flatnonzero(~forced)
+            n_assign = float(np.prod(allowed[free].sum(axis=1).astype(float)))
+            sol = (self._enumerate_mixed(q0, p0, allowed, forced, scale) if n_assign <= 4096
+                   else self._lemke(q0, p0, allowed, forced, scale))
+        sol.iterations = it
+        return sol

@@ -1,0 +1,231 @@
+"""LU factor cache and low-rank updates of the step's linear systems (MODEL.md s.4).
+
+A node-state assignment ``s`` fixes two of ``(dv_j, w_j, q_j + s f_j p_j, p_j)`` per node and
+leaves a square system ``M_s x = h`` in the slips of the non-stick nodes and the gaps of the
+separated ones.  :class:`FactorCache` (a mixin of :class:`~.complementarity.StepSolver`) keeps
+LU factors per assignment (LRU, bounded in bytes) and solves an assignment within
+``max_update_rank`` changed nodes of the last factorized one by a Sherman-Morrison-Woodbury
+update of it.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import scipy.linalg as sla
+from scipy.linalg.lapack import dgecon
+
+from .step_types import BACKWARD, FORWARD, SEPARATED, STICK, _Factor
+
+
+class FactorCache:
+    """Mixin: the assignment systems, their LU cache and Woodbury updates (see module doc)."""
+
+    # ------------------------------------------------------------------ K blocks
+    def _Kq(self, rows, cols):
+        """Rows ``rows`` of ``dq/dz`` (``z = (dv, w)``), columns ``cols`` (indices into z)."""
+        return self.K[np.ix_(rows, cols)]
+
+    def _Kp(self, rows, cols):
+        """Rows ``rows`` of ``dp/dz``, columns ``cols``."""
+        return self.K[np.ix_(self.n + np.asarray(rows, int), cols)]
+
+    def _layout(self, s):
+        """Free unknowns (indices into z) and the row coefficients of assignment ``s``."""
+        n = self.n
+        jv = np.flatnonzero(s != STICK)
+        jw = np.flatnonzero(s == SEPARATED)
+        sv = s[jv]
+        coef = np.where(sv == FORWARD, self.f[jv], np.where(sv == BACKWARD, -self.f[jv], 0.0))
+        return np.concatenate([jv, n + jw]), coef, jv, jw
+
+    def _G_rows(self, s, free, coef, jv, jw, cols):
+        """Rows of the assignment's equations (a-rows ``q + c p``, b-rows ``p``) at ``cols``."""
+        n = self.n
+        out = self.K.take(np.concatenate([jv, n + jw, n + jv]), axis=0).take(cols, axis=1)
+        m = jv.size + jw.size
+        out[:jv.size] += coef[:, None] * out[m:]
+        return out[:m]
+
+    def _rhs(self, coef, jv, jw, q0, p0):
+        return -np.concatenate([q0[jv] + coef * p0[jv], p0[jw]])
+
+    # ------------------------------------------------------------------ factorizations
+    def _factor(self, s, key):
+        free, coef, jv, jw = self._layout(s)
+        Ms = self._G_rows(s, free, coef, jv, jw, free)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            lu = sla.lu_factor(Ms, check_finite=False)
+            anorm = np.abs(Ms).sum(axis=0).max()
+            rcond = dgecon(lu[0], anorm, norm="1")[0]
+        self.totals["factorizations"] += 1
+        self._counters["factorizations"] += 1
+        if not np.isfinite(rcond) or rcond < 1e-14:
+            return None
+        F = _Factor(key, s.copy(), free, coef, jv, jw, lu, Ms.nbytes)
+        self._cache[key] = F
+        self._cache_used += F.nbytes
+        while self._cache_used > self.cache_bytes and len(self._cache) > 1:
+            _, old = self._cache.popitem(last=False)
+            self._cache_used -= old.nbytes
+        self._base = F
+        return F
+
+    def _full_solve(self, F: _Factor, rhs):
+        """Solve ``G_s z = rhs`` (full 2N system of assignment ``F.s``); rhs shape (2N, k)."""
+        n2 = 2 * self.n
+        Z = np.zeros((n2, rhs.shape[1]))
+        fixed = np.ones(n2, bool)
+        fixed[F.free] = False
+        Z[fixed] = rhs[fixed]
+        red = rhs[F.free].copy()
+        nzc = np.flatnonzero(fixed & np.any(rhs != 0, axis=1))
+        if nzc.size and F.free.size:
+            red -= self._G_rows(F.s, F.free, F.coef, F.jv, F.jw, nzc) @ Z[nzc]
+        if F.free.size:
+            Z[F.free] = sla.lu_solve(F.lu, red, check_finite=False)
+        return Z
+
+    def _full_rhs(self, s, q0, p0):
+        n = self.n
+        h = np.zeros(2 * n)
+        c = np.where(s == FORWARD, self.f, np.where(s == BACKWARD, -self.f, 0.0))
+        a = s != STICK
+        h[:n][a] = -(q0[a] + c[a] * p0[a])
+        b = s == SEPARATED
+        h[n:][b] = -p0[b]
+        return h
+
+    def _rows_full(self, s, rows):
+        """Full rows (length 2N) ``rows`` of the assignment's system ``G_s``."""
+        n = self.n
+        G = np.zeros((len(rows), 2 * n))
+        for i, r in enumerate(rows):
+            j = int(r) % n
+            if r < n and s[j] != STICK:
+                c = self.f[j] if s[j] == FORWARD else (-self.f[j] if s[j] == BACKWARD else 0.0)
+                G[i, :n] = self.A[j] + c * self.Bt[j]
+                G[i, n:] = self.B[j] + c * self.C[j]
+            elif r >= n and s[j] == SEPARATED:
+                G[i, :n] = self.Bt[j]
+                G[i, n:] = self.C[j]
+            else:
+                G[i, r] = 1.0
+        return G
+
+    def _woodbury(self, F: _Factor, s, q0, p0):
+        """Solve assignment ``s`` from the factors of ``F.s`` by a low-rank correction.
+
+        ``G_s = G_F + E D^T`` differs in the rows of the changed nodes; Sherman-Morrison-Woodbury
+        ``z = x0 - Y (I + D^T Y)^-1 D^T x0`` with ``x0 = G_F^-1 h_s``, ``Y = G_F^-1 E``.
+        """
+        n = self.n
+        changed = np.flatnonzero(s != F.s)
+        rows = np.concatenate([changed, n + changed])
+        DT = self._rows_full(s, rows) - self._rows_full(F.s, rows)
+        keep = np.any(DT != 0, axis=1)
+        rows, DT = rows[keep], DT[keep]
+        E = np.zeros((2 * n, rows.size + 1))
+        E[rows, np.arange(rows.size)] = 1.0
+        E[:, -1] = self._full_rhs(s, q0, p0)
+        Y = self._full_solve(F, E)
+        Y, x0 = Y[:, :-1], Y[:, -1]
+        cap = np.eye(rows.size) + DT @ Y
+        if np.linalg.cond(cap) > 1e10:
+            return None
+        z = x0 - Y @ np.linalg.solve(cap, DT @ x0)
+        z[:n][s == STICK] = 0.0
+        z[n:][s != SEPARATED] = 0.0
+        self.totals["updates"] += 1
+        self._counters["updates"] += 1
+        return z
+
+    def _solve_set(self, s, q0, p0, scale):
+        """``z = (dv, w)`` of assignment ``s``; ``None`` if its matrix is singular."""
+        n = self.n
+        self._last_factor = None
+        if not np.any(s != STICK):
+            return np.zeros(2 * n)
+        key = s.tobytes()
+        F = self._cache.get(key)
+        if F is not None:
+            self._cache.move_to_end(key)
+            self.totals["cache_hits"] += 1
+            self._counters["cache_hits"] += 1
+            self._base = F
+            return self._lu_solve(F, q0, p0)
+        B0 = self._base
+        if (B0 is not None and B0.free.size >= self.update_min_size
+                and np.count_nonzero(s != B0.s) <= self.max_update_rank):
+            z = self._woodbury(B0, s, q0, p0)
+            if z is not None and self._equations_ok(s, z, q0, p0, scale):
+                return z
+        F = self._factor(s, key)
+        if F is None:
+            return None
+        return self._lu_solve(F, q0, p0)
+
+    def _lu_solve(self, F, q0, p0):
+        """``z`` of the cached assignment ``F`` by one pair of triangular solves (LAPACK getrs
+        called directly: the factors and right-hand side are finite by construction, checked
+        once when ``F`` was factorized, so scipy's per-call checks are skipped)."""
+        z = np.zeros(2 * self.n)
+        x, info = self._getrs(F.lu[0], F.lu[1], self._rhs(F.coef, F.jv, F.jw, q0, p0),
+                              overwrite_b=True)
+        z[F.free] = x
+        self._last_factor = F
+        return z
+
+    def _remember(self, s, key):
+        """Factorize (and cache) an accepted assignment the second time it is accepted.
+
+        Assignments solved by a Woodbury update are not cached; one that recurs (the same set
+        over consecutive steps, or the same step of the next period on the way to a steady
+        cycle) is worth one LU so that later visits are plain cache hits.
+        """
+        if key in self._cache or not np.any(s != STICK):
+            return
+        count = self._accepted.get(key, 0) + 1
+        if len(self._accepted) > 100000:
+            self._accepted.clear()
+        self._accepted[key] = count
+        m = np.count_nonzero(s != STICK) + np.count_nonzero(s == SEPARATED)
+        if count >= 2 and self._cache_used + 8.0 * m * m <= self.cache_bytes:  # no thrashing
+            base = self._base
+            self._factor(s, key)
+            self._base = base if base is not None else self._base
+
+    def _equations_ok(self, s, z, q0, p0, scale):
+        q, p = self._reactions(z, q0, p0)
+        c = np.where(s == FORWARD, self.f, np.where(s == BACKWARD, -self.f, 0.0))
+        a = s != STICK
+        b = s == SEPARATED
+        err = max(np.abs(q[a] + c[a] * p[a]).max(initial=0.0), np.abs(p[b]).max(initial=0.0))
+        return err <= 1e-3 * self.feas_tol * scale
+
+    def _reactions(self, z, q0, p0, F=None):
+        """``(q, p) = (q0, p0) + K z``.
+
+        ``F``: the cached factor that produced ``z`` (its support is ``F.free``); its rows
+        ``K[F.free]`` are kept with the factor (counted in the cache budget) so that a warm step
+        costs one matrix-vector product with them and no gather.  Otherwise the rows of the
+        non-zero entries are gathered (``K`` is symmetric: rows instead of strided columns).
+        """
+        n = self.n
+        if F is not None:
+            kr = F.krows
+            if kr is None:
+                kr = self.K[F.free]
+                if self._cache_used + kr.nbytes <= self.cache_bytes and F.key in self._cache:
+                    F.krows = kr
+                    F.nbytes += kr.nbytes
+                    self._cache_used += kr.nbytes
+            r = z[F.free] @ kr
+        else:
+            idx = np.flatnonzero(z)
+            if not idx.size:
+                return q0.copy(), p0.copy()
+            r = z[idx] @ self.K[idx] if idx.size < n else self.K @ z
+        return q0 + r[:n], p0 + r[n:]

@@ -1,0 +1,173 @@
+"""The specification of the crack-network study (issue 4, issue 13; seed 002 s.4.1)."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, fields
+
+import numpy as np
+
+from ..model.errors import InputError
+
+__all__ = ["SweepSpec"]
+
+_SOLVER_FIELDS = ("method", "steps_per_cycle", "max_cycles", "tol")
+_SAMPLER_FIELDS = ("density", "half_length", "orientation", "min_spacing")
+_MODEL_FIELDS = ("n_cracks", *_SAMPLER_FIELDS, "seed", "shear_modulus", "poisson_ratio",
+                 "friction")
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """The Monte Carlo crack-network study (issue 4; seed 002 section 4.1).
+
+    Crack sets (one per realisation) are drawn by ``crack_networks.sample_crack_set`` and turned
+    into a discrete system by ``crack_networks.kachanov_model``; the far field is
+    ``S(t) = static + lam cyclic cos(2 pi t)`` (``(sxx, sxy, syy)``, tension positive).
+
+    Parameters
+    ----------
+    n_cracks : int
+    density, half_length, orientation, min_spacing
+        Passed to ``sample_crack_set`` (``None``: its default; ``orientation="uniform"``:
+        angles uniform in ``[0, pi)``).
+    shear_modulus, poisson_ratio, friction : float
+    static, cyclic : tuple of 3 floats
+        Far-field stresses ``(sxx, sxy, syy)``; default the seed's ``S0 = p0 (-1, 0, -1)``,
+        ``S1 = p0 (0, 1, 0)`` with ``p0 = 1``.
+    n_realisations : int
+    lams : "auto" or tuple of float
+        Load factors.  ``"auto"``: chosen from each realisation's own bounds
+        (:func:`shakedown.studies.design.lam_points`): ``n_lams`` points evenly spaced in
+        ``lam / lam2`` over ``lam_span``, ``n_band`` inside ``(lam1, lam2)``, ``n_adj`` inside
+        ``(lam_adj, lam1)``, then ``n_refine`` where min and max ``W*`` differ most and at the
+        bracket of ``lam_u``.  A tuple: exactly these load factors for every realisation.
+    n_lams, n_band, n_adj, n_refine : int
+    lam_span : tuple of 2 floats
+        Range of ``lam / lam2`` of the ``n_lams`` evenly spaced points.
+    n_states : int
+        Initial states per (realisation, lam) (:func:`shakedown.studies.design.initial_states`:
+        zero, a safe state, the two uniform friction-limit corners, then random corners and
+        random slips in a box of ``state_scale`` natural slip scales), the same states at every
+        ``lam``.  The default 8 is chosen from the measured convergence of min and max with the
+        number of states (``benchmarks/RESULTS_study.md``).
+    state_scale : float
+    seed : int
+        Root of every random draw.
+    method, steps_per_cycle, max_cycles, tol
+        Passed to :func:`shakedown.solve_cycles`.
+    stress_scale : float, optional
+        ``p0`` of the normalisation of ``W*``; default ``max|static|`` (or ``max|cyclic|`` when
+        the static stress is zero).
+    """
+
+    n_cracks: int = 100
+    density: float | None = 0.1
+    half_length: float | None = None
+    orientation: str | float | None = None
+    min_spacing: float | None = None
+    shear_modulus: float = 1.0
+    poisson_ratio: float = 0.25
+    friction: float = 0.6
+    static: tuple = (-1.0, 0.0, -1.0)
+    cyclic: tuple = (0.0, 1.0, 0.0)
+    n_realisations: int = 1
+    lams: str | tuple = "auto"
+    n_lams: int = 12
+    lam_span: tuple = (0.5, 2.0)
+    n_band: int = 5
+    n_adj: int = 2
+    n_refine: int = 2
+    n_states: int = 8
+    state_scale: float = 2.0
+    seed: int = 0
+    method: str = "implicit"
+    steps_per_cycle: int = 64
+    max_cycles: int = 200
+    tol: float = 1e-10
+    stress_scale: float | None = None
+
+    def __post_init__(self):
+        def setv(name, value):
+            object.__setattr__(self, name, value)
+
+        for name in ("static", "cyclic"):
+            v = tuple(float(x) for x in np.ravel(getattr(self, name)))
+            if len(v) != 3 or not np.all(np.isfinite(v)):
+                raise InputError(f"{name} must be 3 finite stresses (sxx, sxy, syy); got {v}")
+            setv(name, v)
+        if not isinstance(self.lams, str):
+            lams = tuple(float(x) for x in np.ravel(self.lams))
+            if not lams or not all(np.isfinite(x) and x >= 0 for x in lams):
+                raise InputError(f"lams must be 'auto' or a list of load factors >= 0; got {lams}")
+            setv("lams", lams)
+        elif self.lams != "auto":
+            raise InputError(f"lams must be 'auto' or a list of numbers; got {self.lams!r}")
+        span = tuple(float(x) for x in np.ravel(self.lam_span))
+        if len(span) != 2 or not 0 <= span[0] < span[1] or not np.isfinite(span[1]):
+            raise InputError(f"lam_span must be (low, high) with 0 <= low < high; got {span}")
+        setv("lam_span", span)
+        for name in ("half_length", "orientation"):
+            if isinstance(getattr(self, name), list):
+                setv(name, tuple(float(x) for x in getattr(self, name)))
+        for name in ("n_cracks", "n_realisations", "n_lams", "n_states", "max_cycles",
+                     "n_band", "n_adj", "n_refine"):
+            v = getattr(self, name)
+            low = 0 if name in ("n_band", "n_adj", "n_refine") else 1
+            if not isinstance(v, int | np.integer) or isinstance(v, bool) or v < low:
+                raise InputError(f"{name} must be an integer >= {low}; got {v!r}")
+            setv(name, int(v))
+        if self.method not in ("implicit", "events"):
+            raise InputError(f"method must be 'implicit' or 'events'; got {self.method!r}")
+        for name in ("shear_modulus", "state_scale"):
+            if not float(getattr(self, name)) > 0:
+                raise InputError(f"{name} must be > 0; got {getattr(self, name)!r}")
+        if not max(map(abs, self.cyclic)) > 0:
+            raise InputError("cyclic must not be zero: the study sweeps the cyclic load factor")
+
+    @classmethod
+    def from_scene(cls, model: dict, load: dict, options: dict | None = None) -> SweepSpec:
+        """A spec from a scene's ``[model]`` (``kind = "crack_network"``, the keys of
+        :mod:`shakedown.builders.crack_network`), ``[load]`` and ``[analyses.sweep]`` tables.
+
+        The geometry and material keys are taken from ``[model]`` (``orientation_deg`` is
+        converted to radians); the solver and sweep keys from ``options``.  A crack set read
+        from a ``file``, the BEM model and per-crack friction are refused: the study draws
+        random Kachanov networks.
+        """
+        model = {k: v for k, v in model.items() if k != "kind"}
+        if "file" in model:
+            raise InputError("[model] file: the sweep draws random crack sets (one per "
+                             "realisation); give n_cracks, density, ... instead of a file")
+        if model.get("method", "kachanov") != "kachanov":
+            raise InputError(f"[model] method = {model['method']!r}: the sweep uses the "
+                             "Kachanov model; remove the key or set it to 'kachanov'")
+        if model.get("weighting", "uniform") != "uniform":
+            raise InputError(f"[model] weighting = {model['weighting']!r}: the sweep uses "
+                             "Kachanov's uniform averages; remove the key")
+        if isinstance(model.get("friction"), list):
+            raise InputError("[model] friction: the sweep needs one friction coefficient")
+        kw = {k: model[k] for k in _MODEL_FIELDS if k in model}
+        if "orientation_deg" in model:
+            kw["orientation"] = np.radians(model["orientation_deg"]).tolist()
+        for k in ("static", "cyclic"):
+            if k in load:
+                kw[k] = load[k]
+        known = {f.name for f in fields(cls)} - set(_MODEL_FIELDS)
+        for k, v in (options or {}).items():
+            if k in known and v is not None:
+                kw[k] = v
+        return cls(**kw)
+
+    @property
+    def p0(self) -> float:
+        """The stress scale of ``W*``."""
+        if self.stress_scale is not None:
+            return float(self.stress_scale)
+        return max(map(abs, self.static)) or max(map(abs, self.cyclic))
+
+    def solver_options(self) -> dict:
+        return {k: getattr(self, k) for k in _SOLVER_FIELDS}
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        return {k: list(v) if isinstance(v, tuple) else v for k, v in d.items()}
