@@ -262,7 +262,7 @@ MUTATIONS = [
       "comp = float(np.abs(x * y).max() / norm)",
       "comp = 0.0",
       T_STAB, "eigen-answer verification ignores complementarity",
-      equivalent="with x scaled to max x = 1, complementarity max_j x_j |y_j| / norm is at "
+      equivalent="with x scaled to max x = 1, complementarity max_j x_j abs(y_j) / norm is at "
                  "most max(residual on the support, SUPPORT_RTOL = 1e-9 off it) < VERIFY_TOL = "
                  "1e-8: implied by the other two checks"),
     M("T4", "stability", "shakedown/stability/result.py",
