@@ -165,3 +165,23 @@ def test_study_answers_do_not_depend_on_units(tmp_path):
         np.testing.assert_allclose(b[col], a[col], rtol=1e-7, atol=1e-9 * scale)
     for col in ("n_shook_down", "n_cyclic_slip", "frac_slip_max", "frac_open_max"):
         np.testing.assert_array_equal(b[col], a[col])
+
+
+def test_verdict_states_the_band_cyclic_slip_below_lam1_and_lam_u():
+    from shakedown.studies.spec import SweepSpec
+    from shakedown.studies.summary import regions, verdict
+
+    rel = pd.DataFrame(dict(realisation=[0], lam1=[1.0], lam2=[2.0], lam_adj=[0.5]))
+    s = pd.DataFrame(dict(
+        realisation=0, point=["g0", "a0", "b0", "g1", "g2"], lam=[0.4, 0.8, 1.5, 3.0, 4.0],
+        x=[0.2, 0.4, 0.75, 1.5, 2.0], W_star_min=[0, 0, 0, 1.0, 2.0],
+        W_star_max=[0, 0.1, 0.3, 1.2, 2.0], n_states=4, n_cyclic_slip=[0, 1, 3, 4, 4],
+        all_slip=[False, False, False, False, True], lam1=1.0, lam2=2.0, lam_adj=0.5))
+    lu = lam_u(s)
+    text = verdict(SweepSpec(), rel, s, lu, regions(s, lu))
+    assert "lam1 = 1 < lam < lam2 = 2" in text and "max W* up to 0.3" in text
+    assert "from lam/lam2 = 0.4 to 1.5" in text  # where min and max differ
+    assert "Below lam1, 1 of 8 runs ended in cyclic slip" in text
+    assert "between lam_adj = 0.5 and lam1: 1 of 4" in text
+    assert "from lam_u = 4 (lam_u/lam2 = 2) on" in text
+    assert "for lam >= 4 (lam/lam2 = 2)" in text
