@@ -49,6 +49,7 @@ _LAZY = {
     "scenes": None,
     "gallery": None,
     "sweep": "studies.sweep",
+    "half_plane_model": "models.half_plane",
 }
 
 #: Modules that moved in the stage layout (0.2), by their old name: ``import shakedown.sweep``

@@ -78,8 +78,9 @@ class ConstraintSet:
         return self.G.shape[1]
 
     def labels(self) -> list[str]:
+        """Names of the rows, nodes numbered from 1 as everywhere a person reads: ``I_1``..."""
         n = self.n_nodes
-        return [f"I_{j}" for j in range(n)] + [f"II_{j}" for j in range(n)]
+        return [f"I_{j + 1}" for j in range(n)] + [f"II_{j + 1}" for j in range(n)]
 
     def offsets(self, lam: float) -> np.ndarray:
         return self.c + lam * self.m
@@ -288,7 +289,7 @@ class ShakedownBounds:
         return pd.DataFrame(
             {
                 "constraint": self.constraints.labels(),
-                "node": np.concatenate([np.arange(n), np.arange(n)]),
+                "node": np.concatenate([np.arange(1, n + 1), np.arange(1, n + 1)]),  # from 1
                 "family": ["I"] * n + ["II"] * n,
                 "slip_direction": ["backward"] * n + ["forward"] * n,
                 "lam_low": self.lam_low,
@@ -340,7 +341,7 @@ class ShakedownBounds:
             f"shakedown bounds ({self.n_nodes} nodes): {self.status}",
             f"  lam1 = {d['lam1']}   (limiting constraint: {d['limiting_constraint'] or '-'})",
             f"  lam2 = {d['lam2']}",
-            f"  lam_adj = {d['lam_adj']}   (node {self.adjacency_node})",
+            f"  lam_adj = {d['lam_adj']}   (node {self.adjacency_node + 1})",
             f"  no-separation holds up to lam = {d['lam_separation']}",
             f"  safe state at lam = {d['safe_lam']}: margin {d['safe_margin']}",
             f"  LPs: {self.n_lps}, simplex iterations: {self.simplex_iterations}, "

@@ -153,3 +153,21 @@ def progress_bar(total: int | None = None, desc: str = "", initial: int = 0, uni
     """A :meth:`ProgressDisplay.bar` on stderr (terminal or log style chosen automatically)."""
     return ProgressDisplay(enabled=enabled).bar(total=total, desc=desc, initial=initial,
                                                 unit=unit)
+
+
+def described(progress, desc: str, unit: str = "it"):
+    """``progress`` with its description replaced by ``desc`` (what a person reads).
+
+    Stages name their phases tersely (``"lam scan"``); a command wraps their ``progress``
+    argument with a sentence saying what is being done, e.g. ``"growth-rate scan s"``.
+    """
+    if progress is None:
+        return None
+
+    def call(iterable, total=None, desc=None, **kw):
+        if isinstance(progress, ProgressDisplay):
+            return progress(iterable, total=total, desc=text, unit=unit)
+        return progress(iterable, total=total, desc=text)
+
+    text = desc
+    return call

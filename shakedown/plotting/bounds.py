@@ -99,7 +99,9 @@ def plot_constraints_2d(system, load, lam: float, *, t=None, ax=None, limits=Non
     if show_region and len(verts) >= 3:
         ax.fill(verts[:, 0], verts[:, 1], color="0.85", zorder=0, label=r"safe region $\mathcal{H}$")
     elif show_region and len(verts):
-        ax.plot(verts[:, 0], verts[:, 1], "k.", ms=8, label=r"$\mathcal{H}$ (degenerate)")
+        shape = "a segment" if len(verts) == 2 else "a point"
+        ax.plot(verts[:, 0], verts[:, 1], "k.-", ms=8, lw=2.5,
+                label=rf"safe region $\mathcal{{H}}$ (degenerate: {shape})")
     if state is not None:
         ax.plot(*np.asarray(state, float), "ko", ms=5, label="state")
     ax.set_xlim(*xlim)

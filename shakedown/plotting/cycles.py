@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..model.errors import InputError
+from .trajectory import plot_trajectory
 
 __all__ = [
     "plot_dissipation",
@@ -61,7 +62,16 @@ def _dissipation_array(run):
     return W
 
 
-def plot_dissipation(run, ax=None, *, log: bool = False, relative: bool = False, **line_kw):
+#: Placeholder units when a scene declares none (``[scene] force_unit``, ``length_unit``).
+UNITS = {"force": "[force]", "length": "[length]", "energy": "[force x length]"}
+
+
+def _unit(units, key):
+    return (units or {}).get(key, UNITS[key])
+
+
+def plot_dissipation(run, ax=None, *, log: bool = False, relative: bool = False, units=None,
+                     **line_kw):
     """Dissipation per cycle ``W_k`` against the cycle number ``k = 1, 2, ...``.
 
     Parameters
@@ -73,13 +83,20 @@ def plot_dissipation(run, ax=None, *, log: bool = False, relative: bool = False,
     relative : bool
         Plot ``|W_k - W_steady|`` instead (``W_steady`` from ``run.steady_dissipation``, else the
         last cycle): geometric convergence (seed 002 Fig. 8) is a straight line on a log axis.
+    units : dict, optional
+        ``{"energy": ...}`` unit of ``W`` for the axis label (default ``[force x length]``).
     **line_kw
         Passed to ``ax.plot``.
+
+    With at most three cycles the values are drawn as labelled bars (a lone dot says
+    nothing); cycle numbers are integers.
 
     Returns
     -------
     matplotlib Axes
     """
+    from matplotlib.ticker import MaxNLocator
+
     W = _dissipation_array(run)
     ax = _new_ax(ax)
     k = np.arange(1, W.size + 1)
@@ -96,11 +113,24 @@ def plot_dissipation(run, ax=None, *, log: bool = False, relative: bool = False,
         y = np.where(y > 0, y, np.nan)
     line_kw.setdefault("marker", "o")
     line_kw.setdefault("markersize", 3)
-    ax.plot(k, y, **line_kw)
+    if W.size <= 3 and not log:
+        bars = ax.bar(k, y, width=0.5, color=line_kw.get("color", "C0"))
+        ax.bar_label(bars, labels=[f"{v:.4g}" for v in y], fontsize=8)
+        ax.set_xlim(0.3, max(W.size, 1) + 0.7)
+        top = float(np.nanmax(np.abs(y))) if W.size and np.isfinite(y).any() else 0.0
+        ax.set_ylim(0, top * 1.25 if top > 0 else 1.0)
+        ax.set_xticks(k)
+        if top == 0 and W.size:
+            ax.plot(k, y, "o", color=line_kw.get("color", "C0"))
+            ax.text(0.5, 0.5, "W = 0 in every cycle: no node slips", ha="center",
+                    va="center", transform=ax.transAxes)
+    else:
+        ax.plot(k, y, **line_kw)
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     if log:
         ax.set_yscale("log")
     ax.set_xlabel("cycle")
-    ax.set_ylabel(label)
+    ax.set_ylabel(f"{label} {_unit(units, 'energy')}")
     return ax
 
 
@@ -119,7 +149,7 @@ def _steady_frame(run):
     return table
 
 
-def plot_steady_cycle(run, ax=None, *, nodes=None):
+def plot_steady_cycle(run, ax=None, *, nodes=None, units=None):
     """Slips (top) and reactions ``q`` (solid), ``p`` (dashed) (bottom) over the steady cycle.
 
     Parameters
@@ -128,7 +158,10 @@ def plot_steady_cycle(run, ax=None, *, nodes=None):
         Anything with a ``steady_table`` (columns ``t, node, slip, q, p``), or that table.
     ax : sequence of two Axes, optional
     nodes : sequence of int, optional
-        Nodes to draw (all by default; the first 10 when there are more than 10).
+        Nodes to draw (0-based, as in the table; all by default, the first 10 when there are
+        more than 10).  Legends number nodes from 1.
+    units : dict, optional
+        ``{"force": ..., "length": ...}`` for the axis labels.
 
     Returns
     -------
@@ -136,7 +169,16 @@ def plot_steady_cycle(run, ax=None, *, nodes=None):
     """
     tab = _steady_frame(run)
     all_nodes = np.unique(tab["node"].to_numpy(int))
-    nodes = all_nodes[:10] if nodes is None else np.asarray(nodes, int)
+    subset = ""
+    if nodes is None and all_nodes.size > 10:
+        # the 10 nodes that slip most while in contact (stuck nodes are flat lines, and the
+        # slip of an open node moves without friction or reactions)
+        contact = tab[tab["state"].astype(str).isin(["forward", "backward", "stick"])]
+        slipping = contact if len(contact) else tab
+        swing = slipping.groupby("node")["slip"].agg(lambda x: float(x.max() - x.min()))
+        nodes = np.sort(swing.sort_values(ascending=False).index.to_numpy(int)[:10])
+        subset = f" (the 10 of {all_nodes.size} nodes that slip most in contact)"
+    nodes = all_nodes if nodes is None else np.asarray(nodes, int)
     if ax is None:
         fig, ax = _plt().subplots(2, 1, sharex=True, figsize=(6.4, 5.6))
     ax = np.asarray(ax).ravel()
@@ -146,13 +188,14 @@ def plot_steady_cycle(run, ax=None, *, nodes=None):
     for i, j in enumerate(nodes):
         sub = tab[tab["node"] == j].sort_values("t")
         c = colours[i % len(colours)]
-        ax[0].plot(sub["t"], sub["slip"], color=c, label=f"node {j}")
-        ax[1].plot(sub["t"], sub["q"], color=c, label=f"q node {j}")
-        ax[1].plot(sub["t"], sub["p"], color=c, ls="--", label=f"p node {j}")
-    ax[0].set_ylabel("slip v")
-    ax[1].set_ylabel("reactions q (solid), p (dashed)")
+        ax[0].plot(sub["t"], sub["slip"], color=c, label=f"node {j + 1}")
+        ax[1].plot(sub["t"], sub["q"], color=c, label=f"q node {j + 1}")
+        ax[1].plot(sub["t"], sub["p"], color=c, ls="--", label=f"p node {j + 1}")
+    ax[0].set_ylabel(f"slip v {_unit(units, 'length')}")
+    ax[1].set_ylabel(f"q (solid), p (dashed) {_unit(units, 'force')}")
+    ax[0].set_title("steady cycle" + subset, fontsize=10)
     ax[1].set_xlabel("t [cycles]")
-    ax[0].legend(fontsize="small")
+    ax[0].legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
     return ax
 
 
@@ -180,6 +223,7 @@ def plot_node_states(run, ax=None):
         index="node", columns="t", values="code", aggfunc="first"
     )
     t = grid.columns.to_numpy(float)
+    grid.index = grid.index.astype(int) + 1  # nodes numbered from 1
     ax = _new_ax(ax)
     cmap = ListedColormap([_STATE_COLOURS.get(s, "#9467bd") for s in labels])
     dt = np.diff(t).min() if t.size > 1 else 1.0
@@ -187,162 +231,17 @@ def plot_node_states(run, ax=None):
     ax.imshow(grid.to_numpy(float), aspect="auto", interpolation="nearest", cmap=cmap,
               vmin=-0.5, vmax=len(labels) - 0.5, extent=extent)
     ax.legend(handles=[Patch(color=cmap(i), label=s) for i, s in enumerate(labels)],
-              fontsize="small", loc="upper right")
-    ax.set_yticks(grid.index.to_numpy(int) if len(grid.index) <= 20 else ax.get_yticks())
+              fontsize="small", loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
+    if len(grid.index) <= 20:
+        ax.set_yticks(grid.index.to_numpy(int))
+    ax.set_ylim(extent[2], extent[3])  # exactly the nodes: no empty rows below the last
     ax.set_xlabel("t [cycles]")
     ax.set_ylabel("node")
+    ax.set_title("node states over the steady cycle", fontsize=10)
     return ax
 
 
-def _lines(system, load, lam, times):
-    from ..bounds.engine import extreme_constraints
-
-    cs = extreme_constraints(system, load)
-    extreme = cs.offsets(lam)
-    inst = [cs.instantaneous(system, load, float(t), lam) for t in times]
-    return cs.G, extreme, inst
-
-
-def _path(table):
-    """Slips of a time-series table in time order, shape (n_times, N)."""
-    return table.pivot_table(index="t", columns="node", values="slip",
-                             aggfunc="last").sort_index().to_numpy(float)
-
-
-def _trajectory_arrays(trajectories):
-    if trajectories is None:
-        return []
-    if hasattr(trajectories, "cycle_start_slips") or (
-        isinstance(trajectories, np.ndarray) and trajectories.ndim == 2
-    ):
-        trajectories = [trajectories]
-    out = []
-    for tr in trajectories:
-        if hasattr(tr, "cycle_start_slips"):
-            tab = getattr(tr, "steady_table", None)
-            hist = getattr(tr, "history", None)
-            starts = np.asarray(tr.cycle_start_slips, float)
-            if hist is not None and len(hist):  # the whole path (record_history=True)
-                starts = _path(hist)
-            loop = None
-            if tab is not None and len(tab) and int(getattr(tr, "period", 1)) > 0:
-                loop = _path(tab)
-            out.append((starts, loop))
-        else:
-            arr = np.asarray(tr, float)
-            if arr.ndim != 2 or arr.shape[1] != 2:
-                raise InputError(f"a trajectory must have shape (n_points, 2); got {arr.shape}")
-            out.append((None, arr))
-    return out
-
-
-def plot_trajectory(system, load, lam: float, trajectories=None, ax=None, *, space: str = "v",
-                    times=(), extremes: bool = True, shade_safe: bool = True, labels=None):
-    """Two-node state trajectories over the moving constraint lines (seed 002 Figs. 2-8).
-
-    The constraint lines are ``G_k . v = b_k`` with ``G = [A - F B^T; -(A + F B^T)]`` (MODEL.md
-    s.3: ``I_j``, then ``II_j``); in ``tau = A v`` space they are ``G_k A^-1 tau = b_k`` (for
-    ``B = 0`` perpendicular to the axes, seed 002 Fig. 7).
-
-    Parameters
-    ----------
-    system : DiscreteSystem
-        Two nodes.
-    load : LoadCycle
-    lam : float
-    trajectories : CycleRun, array (n_points, 2), or a list of them, optional
-        A ``CycleRun`` is drawn as its whole path if it was run with ``record_history=True``
-        (thin line), else as its cycle-start states (dots joined by a thin line: the approach
-        to the steady state), and its steady loop (thick line); an array as a path.
-    ax : matplotlib Axes, optional
-    space : {"v", "tau"}
-    times : sequence of float
-        Also draw the instantaneous constraint lines at these times (cycles), thin solid.
-    extremes : bool
-        Draw the extreme positions of the 4 constraints, dashed (``I^E, II^E, III^E, IV^E``
-        of the seed are ``I_0, II_0, I_1, II_1`` here).
-    shade_safe : bool
-        Shade the safe shakedown region ``H(lam)`` when it is a bounded non-empty polygon.
-    labels : sequence of str, optional
-        Legend labels of the trajectories.
-
-    Returns
-    -------
-    matplotlib Axes
-    """
-    if system.n_nodes != 2:
-        raise InputError(f"plot_trajectory is for two-node systems; got N = {system.n_nodes}")
-    if space not in ("v", "tau"):
-        raise InputError(f"space must be 'v' or 'tau'; got {space!r}")
-    ax = _new_ax(ax)
-    G, b_ext, b_inst = _lines(system, load, float(lam), times)
-    T = np.eye(2) if space == "v" else system.A  # point map v -> plotted coordinates
-    Gs = G if space == "v" else G @ np.linalg.inv(system.A)
-    trajs = _trajectory_arrays(trajectories)
-    pts = [np.zeros((1, 2))]
-    colours = _plt().rcParams["axes.prop_cycle"].by_key()["color"]
-    for i, (starts, loop) in enumerate(trajs):
-        c = colours[i % len(colours)]
-        lab = labels[i] if labels is not None and i < len(labels) else f"trajectory {i + 1}"
-        if starts is not None and len(starts):
-            s = starts @ T.T
-            ax.plot(s[:, 0], s[:, 1], color=c, lw=0.8, marker="o" if len(s) <= 300 else None,
-                    ms=3, alpha=0.7)
-            pts.append(s)
-            lab_start = None
-        else:
-            lab_start = lab
-        if loop is not None and len(loop):
-            l_ = loop @ T.T
-            l_ = np.vstack([l_, l_[:1]]) if starts is not None else l_
-            ax.plot(l_[:, 0], l_[:, 1], color=c, lw=2.2, label=lab if lab_start is None else lab)
-            pts.append(l_)
-    # view box: trajectories and the safe region / line intersections
-    from ..bounds.engine import _polygon_2d
-
-    poly = _polygon_2d(G, b_ext) if extremes else np.zeros((0, 2))
-    if len(poly):
-        pts.append(poly @ T.T)
-    for k in range(G.shape[0] if len(pts) == 1 else 0):  # nothing else to frame: corners
-        for m in range(k + 1, G.shape[0]):
-            M = np.array([G[k], G[m]])
-            if abs(np.linalg.det(M)) > 1e-12 * np.abs(M).max() ** 2:
-                pts.append((np.linalg.solve(M, [b_ext[k], b_ext[m]]) @ T.T)[None, :])
-    allp = np.vstack(pts)
-    lo, hi = allp.min(axis=0), allp.max(axis=0)
-    pad = 0.15 * max(float(np.max(hi - lo)), 1e-12)
-    lo, hi = lo - pad, hi + pad
-    if shade_safe and len(poly) >= 3:
-        P = poly @ T.T
-        ax.fill(P[:, 0], P[:, 1], color="0.85", zorder=0, label="safe region H")
-    # seed 002 numbering: I, II for node 0 (rows 0, 2), III, IV for node 1 (rows 1, 3)
-    names = ["I (I_0)", "III (I_1)", "II (II_0)", "IV (II_1)"]
-    styles = ["C3", "C0", "C1", "C2"]
-    for k in range(4):
-        offs = ([b_ext[k]] if extremes else []) + [b[k] for b in b_inst]
-        for i, b in enumerate(offs):
-            dashed = extremes and i == 0
-            _axline(ax, Gs[k], b, color=styles[k], ls="--" if dashed else "-",
-                    lw=1.0 if dashed else 0.6, alpha=1.0 if dashed else 0.5,
-                    label=f"{names[k]} extreme" if dashed else None)
-    ax.set_xlim(lo[0], hi[0])
-    ax.set_ylim(lo[1], hi[1])
-    x, y = ("v", "v") if space == "v" else ("tau", "tau")
-    ax.set_xlabel(f"{x}_0")
-    ax.set_ylabel(f"{y}_1")
-    ax.legend(fontsize="small")
-    return ax
-
-
-def _axline(ax, g, b, **kw):
-    """Infinite line ``g . x = b``."""
-    g = np.asarray(g, float)
-    p0 = g * b / float(g @ g)
-    d = np.array([-g[1], g[0]])
-    return ax.axline(tuple(p0), tuple(p0 + d), **kw)
-
-
-def plot_uniqueness(study, ax=None):
+def plot_uniqueness(study, ax=None, *, units=None):
     """Steady ``W`` of every initial state of a :class:`~shakedown.steady.UniquenessStudy`.
 
     Runs that shook down are drawn as open circles, runs in cyclic slip as dots, runs that did
@@ -356,11 +255,22 @@ def plot_uniqueness(study, ax=None):
     i = tab["state"].to_numpy(int) if "state" in tab else np.arange(len(tab))
     sd_ = tab["shook_down"].to_numpy(bool)
     ok = np.isfinite(W)
-    ax.plot(i[ok & sd_], W[ok & sd_], "o", mfc="none", label="shook down")
-    ax.plot(i[ok & ~sd_], W[ok & ~sd_], ".", ms=8, label="cyclic slip")
+    if (ok & sd_).any():  # a legend entry only for what is drawn
+        ax.plot(i[ok & sd_], W[ok & sd_], "o", mfc="none", label="shook down")
+    if (ok & ~sd_).any():
+        ax.plot(i[ok & ~sd_], W[ok & ~sd_], ".", ms=8, label="cyclic slip")
     if (~ok).any():
         ax.plot(i[~ok], np.zeros((~ok).sum()), "x", label="no steady cycle")
-    ax.set_xlabel("initial state")
-    ax.set_ylabel("steady W per cycle")
+    from matplotlib.ticker import MaxNLocator
+
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    top = float(np.nanmax(W, initial=0.0)) if ok.any() else 0.0
+    # W >= 0 from 0: equal values are not blown up to rounding noise
+    top = top if top > 0 else 1.0
+    ax.set_ylim(-0.05 * top, 1.15 * top)  # markers at W = 0 drawn whole
+    ax.ticklabel_format(axis="y", useOffset=False)
+    ax.set_xlabel("initial state (0: zero slip)")
+    ax.set_ylabel(f"steady W per cycle {_unit(units, 'energy')}")
+    ax.set_title("steady dissipation from each initial state", fontsize=10)
     ax.legend(fontsize="small")
     return ax

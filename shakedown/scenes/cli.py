@@ -46,6 +46,14 @@ _DESCRIPTIONS = {
 }
 
 
+_SHORT = {
+    "bounds": "shakedown load factors lam1, lam2, lam_adj",
+    "cycles": "cyclic evolution: shakedown or cyclic slip, W per cycle",
+    "sweep": "Monte Carlo study of a crack network",
+    "stability": "critical friction mu* and growth rates s (MCEIP)",
+}
+
+
 def _parser() -> argparse.ArgumentParser:
     from .options import options_help
 
@@ -75,7 +83,7 @@ def _parser() -> argparse.ArgumentParser:
         description="Run every analysis of the scene's [analyses] tables (bounds if none).",
         epilog="The options of each analysis: shakedown bounds|cycles|sweep|stability --help"))
     for name in ANALYSIS_COMMANDS:
-        common(sub.add_parser(name, help=_DESCRIPTIONS[name].split(":")[0].rstrip("."),
+        common(sub.add_parser(name, help=_SHORT[name],
                               description=_DESCRIPTIONS[name], epilog=options_help(name),
                               formatter_class=fmt))
     sub.add_parser("scenes", help="list the built-in scenes")

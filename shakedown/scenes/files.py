@@ -3,10 +3,10 @@
 A scene has four tables::
 
     [scene]                 # optional: name, description
-    name = "two-node coupled"
+    name = "two-node coupled"   # a plain name (no '/', '\\', ':', '..'): the output folder
 
     [model]                 # how to build the DiscreteSystem; `kind` picks the builder
-    kind = "matrices"       # "matrices" | "crack_network" | "fe"
+    kind = "matrices"       # "matrices" | "crack_network" | "fe" | "half_plane"
     A = [[...]]             # builder-specific keys (see shakedown/scenes/builders/<kind>.py)
 
     [load]                  # the periodic welded reactions; keys depend on the model kind
@@ -42,6 +42,7 @@ MODEL_KINDS = {
     "matrices": "shakedown.scenes.builders.matrices",
     "crack_network": "shakedown.scenes.builders.crack_network",
     "fe": "shakedown.scenes.builders.fe",
+    "half_plane": "shakedown.scenes.builders.half_plane",
 }
 
 #: Analyses and the module that runs each.
@@ -188,7 +189,7 @@ def scene_from_dict(raw: dict, path: Path | None = None) -> Scene:
         raise SceneError(f"{label}: missing table [model] (with kind = one of {sorted(MODEL_KINDS)})")
     _require_table(label, "model", model)
     kind = model.get("kind")
-    if kind not in MODEL_KINDS:
+    if not isinstance(kind, str) or kind not in MODEL_KINDS:
         raise SceneError(
             f"{label}: [model] key 'kind' = {kind!r} is not allowed; "
             f"allowed: {', '.join(repr(k) for k in MODEL_KINDS)}"

@@ -1,5 +1,13 @@
 """Nonlinear (complementarity) eigenvalue check of frictional equilibria (MODEL.md s.5).
 
+MCEIP, the *mixed complementarity eigenvalue problem*: with some contact nodes slipping, find
+the smallest friction ``mu*`` at which a non-zero perturbation of the slips can grow while every
+slipping node stays on its friction cone and the others unload from it (MCEIP-mu, quasi-static
+divergence; the equilibrium is stable for friction below ``mu*``), and, with a mass, the growth
+rates of perturbations ``~ e^(s t)`` at a given friction (MCEIP-lam).  The Python API calls the
+growth rate ``lam`` (the seeds' notation); everything the ``shakedown`` command prints or writes
+calls it ``s`` / ``growth_rate``, since ``lam`` is the load factor there.
+
 Pipeline: classify the nodes of an equilibrium or snapshot (:func:`classify_nodes`), condense
 the stiffness onto the slip nodes (:func:`slip_pencil`), solve MCEIP-mu for the critical
 friction (:func:`mceip_mu`) or MCEIP-lam for the growth rates at a given friction

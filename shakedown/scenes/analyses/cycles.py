@@ -73,6 +73,7 @@ def _check(options, n):
 def run(ctx, options: dict) -> dict:
     from ...evolution import steady_cycle, uniqueness_study
     from ...evolution.cycles import solve_cycles
+    from ...model.progress import described
 
     system, load = ctx.system, ctx.load
     n = system.n_nodes
@@ -89,7 +90,8 @@ def run(ctx, options: dict) -> dict:
             system, load, lam, states, rng=options["seed"], n_jobs=options["n_jobs"] or None,
             max_cycles=options["max_cycles"], scale=options["sampling_scale"],
             solver="steady" if options["steady_solver"] else "cycles",
-            progress=ctx.progress, **solver,
+            progress=described(ctx.progress, f"uniqueness study at lam = {lam:.4g}: one run per "
+                               "initial state", "run"), **solver,
         )
         ctx.output.write_table("uniqueness.csv", _from_one(study.table))
         v0 = study.table[[f"initial_slip_{j}" for j in range(n)]].to_numpy(float)[0]
@@ -259,13 +261,19 @@ def cycles_verdict(run, lam: float, energy: str = "[force x length]", study=None
         text = f"{at}, it shook down {when}: no node slips in the steady state (W = 0)."
     elif run.status == "periodic":
         slip = _slipping_nodes(run)
+        n = int(np.size(run.final_slip))
+        which = ""
+        if len(slip) > 12:
+            which = f", {len(slip)} of {n} nodes slip ({_node_list(slip)})"
+        elif slip:
+            which = f", {_node_list(slip)} slip"
         text = (f"{at}, cyclic slip: W = {run.steady_dissipation:.4g} {energy} per cycle, "
-                f"period {int(run.period)}"
-                + (f", {_node_list(slip)} slip" if slip else "") + ".")
+                f"period {int(run.period)}{which}.")
     elif run.status == "not_converged":
         W = np.asarray(run.dissipation, float)
         last = f" (last cycle: W = {W[-1]:.4g} {energy})" if W.size else ""
-        text = (f"{at}, it did not reach a steady state in {int(run.n_cycles)} cycles{last}; "
+        n = int(run.n_cycles)
+        text = (f"{at}, it did not reach a steady state in {n} cycle{'s' * (n != 1)}{last}; "
                 "raise max_cycles to go on.")
     else:
         text = f"{at}, the run stopped before a steady state: {run.message}"
@@ -300,14 +308,17 @@ def _plots(ctx, run, study, lam, options):
         plot_uniqueness,
     )
 
+    units = _units(ctx)
     fig, ax = plt.subplots(figsize=(6, 4))
-    plot_dissipation(run, ax, log=options["log_scale"])
-    ax.set_title(f"dissipation per cycle, lam = {lam:g}")
+    plot_dissipation(run, ax, log=options["log_scale"], units=units)
+    ax.set_title(f"dissipation per cycle at lam = {lam:.4g}", fontsize=10)
     ctx.output.save_figure("dissipation.png", fig)
     has_steady = run.steady_table is not None and len(run.steady_table) > 0
     if has_steady:
         fig, axs = plt.subplots(2, 1, sharex=True, figsize=(6.4, 5.6))
-        plot_steady_cycle(run, axs)
+        plot_steady_cycle(run, axs, units=units)
+        axs[0].set_title(f"steady cycle at lam = {lam:.4g}"
+                         + axs[0].get_title()[len("steady cycle"):], fontsize=10)
         ctx.output.save_figure("steady_cycle.png", fig)
         fig, ax = plt.subplots(figsize=(6.4, 3.5))
         plot_node_states(run, ax)
@@ -317,9 +328,10 @@ def _plots(ctx, run, study, lam, options):
     if ctx.system.n_nodes == 2:
         for space, name in (("v", "trajectory.png"), ("tau", "trajectory_tau.png")):
             fig, ax = plt.subplots(figsize=(5.5, 5))
-            plot_trajectory(ctx.system, ctx.load, lam, run, ax, space=space)
+            plot_trajectory(ctx.system, ctx.load, lam, run, ax, space=space, units=units)
+            ax.set_title(f"trajectory at lam = {lam:.4g}", fontsize=10)
             ctx.output.save_figure(name, fig)
     if study is not None:
         fig, ax = plt.subplots(figsize=(6, 4))
-        plot_uniqueness(study, ax)
+        plot_uniqueness(study, ax, units=units)
         ctx.output.save_figure("uniqueness.png", fig)

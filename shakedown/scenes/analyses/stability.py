@@ -209,12 +209,9 @@ def run(ctx, options: dict) -> dict:
 
 def _scan(ctx):
     """The progress wrapper of the growth-rate scan, with a description a person can read."""
-    progress = ctx.progress
+    from ...model.progress import described
 
-    def wrap(iterable, total=None, desc=""):
-        return progress(iterable, total=total, desc="growth-rate scan s (all MCEIP solutions "
-                        "at each s)")
-    return wrap
+    return described(ctx.progress, "growth-rate scan s (all MCEIP solutions at each s)", "s")
 
 
 class _nothing:
