@@ -38,7 +38,7 @@ def _mark_bounds(ax, result, axis):
     mean = " (mean)" if n > 1 else ""
     if l1v.size and l2v.size:
         ax.axvspan(l1v.mean(), l2v.mean(), color="0.6", alpha=0.35, lw=0,
-                   label=rf"$\lambda_1$ .. $\lambda_2${mean}: initial state matters")
+                   label=rf"band $\lambda_1$ .. $\lambda_2${mean} (bounds)")
     adj = val("lam_adj")
     if adj.size and l1v.size and adj.mean() < l1v.mean():
         ax.axvline(adj.mean(), color="k", ls="-.", lw=1,
@@ -82,7 +82,7 @@ def _inset(ax, result, col, alpha):
     sub = s[(s[col] >= rng[0]) & (s[col] <= rng[1])]
     if len(sub) < 2:
         return
-    ins = ax.inset_axes([0.42, 0.52, 0.34, 0.38])
+    ins = ax.inset_axes([0.09, 0.52, 0.34, 0.36])  # upper left: W* ~ 0 there
     _draw_realisations(ins, sub, col, alpha, False)
     _mark_bounds(ins, result, col)
     ins.set_xlim(*rng)
@@ -141,7 +141,8 @@ def plot_sweep(result, ax=None, *, axis: str = "lam", bands: bool = True,
         ax.set_title(f"Steady dissipation: {spec.n_cracks} cracks, density {spec.density}, "
                      f"f = {spec.friction}, {spec.n_realisations} realisation(s) x "
                      f"{spec.n_states} initial states", fontsize=9)
-    ax.legend(fontsize=7, loc="upper left")
+    # W* grows from the lower left to the upper right: the lower right is free for the legend
+    ax.legend(fontsize=7, loc="lower right")
     if zoom:
         _inset(ax, result, col, alpha if n_real > 1 else 1.0)
     return ax

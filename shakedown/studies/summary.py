@@ -131,11 +131,23 @@ def verdict(spec, realisations: pd.DataFrame, summary: pd.DataFrame, lamu: pd.Da
     parts = [f"{n} realisation(s) of {spec.n_cracks} cracks, friction {spec.friction}, "
              f"{int(summary['n_states'].max())} initial states per load factor."]
     band = summary[(summary["lam"] > summary["lam1"]) & (summary["lam"] <= summary["lam2"])]
-    parts.append(f"The initial state matters for lam1 = {stat(l1)} < lam < lam2 = {stat(l2)} "
+    parts.append(f"By the bounds, the initial state decides whether the body shakes down for "
+                 f"lam1 = {stat(l1)} < lam < lam2 = {stat(l2)} "
                  f"(lam1/lam2 = {stat(l1 / l2, 3)}): there min W* = "
                  f"{band['W_star_min'].max() if len(band) else float('nan'):.3g} and max W* up "
                  f"to {band['W_star_max'].max() if len(band) else float('nan'):.3g} "
                  f"({len(band)} load factors).")
+    first, last = [], []
+    for _, g in summary.groupby("realisation", sort=True):
+        wmax, wmin = g["W_star_max"].to_numpy(float), g["W_star_min"].to_numpy(float)
+        differ = (wmax - wmin > SAME_RTOL * np.abs(wmax)) & (wmax > 0)
+        lam = g["lam"].to_numpy(float)
+        if differ.any():
+            first.append(lam[differ].min() / g["lam2"].iloc[0])
+            last.append(lam[differ].max() / g["lam2"].iloc[0])
+    if first:
+        parts.append(f"In this study min and max W* differ (the initial state matters) from "
+                     f"lam/lam2 = {stat(np.array(first), 3)} to {stat(np.array(last), 3)}.")
     sub = summary[summary["lam"] < summary["lam1"]]
     nslip, nruns = int(sub["n_cyclic_slip"].sum()), int(sub["n_states"].sum())
     below = regs[regs["region"] == "lam_adj to lam1"]

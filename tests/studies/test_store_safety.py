@@ -200,3 +200,32 @@ def test_workers_exit_when_the_main_process_is_killed(tmp_path):
     for p in left:  # do not leave them behind if the test fails
         os.kill(p, signal.SIGKILL)
     assert not left, f"processes {left} outlived their parent by 10 s"
+
+
+def test_cli_takes_the_scheduler_from_set_but_not_from_the_scene_file(tmp_path, capsys):
+    from shakedown.scenes.cli import main
+
+    text = textwrap.dedent("""
+        [model]
+        kind = "crack_network"
+        n_cracks = 4
+        density = 0.05
+        seed = 4
+        [load]
+        static = [-1.0, 0.0, -1.0]
+        cyclic = [0.0, 1.0, 0.0]
+        [analyses.sweep]
+        n_lams = 2
+        n_states = 1
+    """)
+    plain = tmp_path / "plain.toml"
+    plain.write_text(text)
+    shared = tmp_path / "shared.toml"
+    shared.write_text(text + 'scheduler = "tcp://10.0.0.1:8786"\n')
+    assert main(["sweep", str(shared), "-q", "-o", str(tmp_path / "a")]) == 2
+    assert "may not name a Dask scheduler" in capsys.readouterr().err
+    # the command line may: the address reaches the workers (and this one is refused there)
+    assert main(["sweep", str(plain), "-q", "-o", str(tmp_path / "b"),
+                 "--set", "sweep.scheduler=\"bogus\""]) == 2
+    err = capsys.readouterr().err
+    assert "scheduler must be a Dask scheduler address" in err and "may not name" not in err

@@ -140,3 +140,48 @@ def test_batched_states_equal_independent_runs(network):
             assert x["period"] == y["period"] and x["shook_down"] == y["shook_down"]
             np.testing.assert_allclose(x["W"], y["W"], rtol=1e-9, atol=0)
             assert x["frac_slip"] == y["frac_slip"] or np.isnan(x["frac_slip"])
+
+
+def test_study_answers_do_not_depend_on_units(tmp_path):
+    """The same study in SI-like units (mu = 27 GPa, stresses of 130 MPa, not powers of two):
+    the same load factors, W* (dimensionless) and counts as in unit scales."""
+    from dataclasses import replace
+
+    from shakedown.studies.sweep import SweepSpec, run_sweep
+
+    unit = SweepSpec(n_cracks=8, density=0.1, n_lams=3, n_band=2, n_adj=1, n_refine=1,
+                     n_states=4, steps_per_cycle=16, max_cycles=60, seed=3)
+    p0, mu = 1.3e8, 2.7e10
+    si = replace(unit, shear_modulus=mu, static=(-p0, 0.0, -p0), cyclic=(0.0, p0, 0.0))
+    a = run_sweep(unit, tmp_path / "unit", n_workers=1, progress=False).summary
+    b = run_sweep(si, tmp_path / "si", n_workers=1, progress=False).summary
+    assert list(a["point"]) == list(b["point"])
+    # load factors from the bounds: the LP tolerances are relative, so the bounds agree to
+    # the LP's relative optimality tolerance (1e-9); W* to the steady-state tolerance (1e-10
+    # relative change per cycle) amplified by the few cycles of the approach: 1e-7
+    np.testing.assert_allclose(b["lam"], a["lam"], rtol=1e-8)
+    scale = float(a["W_star_max"].max())
+    for col in ("W_star_min", "W_star_max"):
+        np.testing.assert_allclose(b[col], a[col], rtol=1e-7, atol=1e-9 * scale)
+    for col in ("n_shook_down", "n_cyclic_slip", "frac_slip_max", "frac_open_max"):
+        np.testing.assert_array_equal(b[col], a[col])
+
+
+def test_verdict_states_the_band_cyclic_slip_below_lam1_and_lam_u():
+    from shakedown.studies.spec import SweepSpec
+    from shakedown.studies.summary import regions, verdict
+
+    rel = pd.DataFrame(dict(realisation=[0], lam1=[1.0], lam2=[2.0], lam_adj=[0.5]))
+    s = pd.DataFrame(dict(
+        realisation=0, point=["g0", "a0", "b0", "g1", "g2"], lam=[0.4, 0.8, 1.5, 3.0, 4.0],
+        x=[0.2, 0.4, 0.75, 1.5, 2.0], W_star_min=[0, 0, 0, 1.0, 2.0],
+        W_star_max=[0, 0.1, 0.3, 1.2, 2.0], n_states=4, n_cyclic_slip=[0, 1, 3, 4, 4],
+        all_slip=[False, False, False, False, True], lam1=1.0, lam2=2.0, lam_adj=0.5))
+    lu = lam_u(s)
+    text = verdict(SweepSpec(), rel, s, lu, regions(s, lu))
+    assert "lam1 = 1 < lam < lam2 = 2" in text and "max W* up to 0.3" in text
+    assert "from lam/lam2 = 0.4 to 1.5" in text  # where min and max differ
+    assert "Below lam1, 1 of 8 runs ended in cyclic slip" in text
+    assert "between lam_adj = 0.5 and lam1: 1 of 4" in text
+    assert "from lam_u = 4 (lam_u/lam2 = 2) on" in text
+    assert "for lam >= 4 (lam/lam2 = 2)" in text

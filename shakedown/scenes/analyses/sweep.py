@@ -79,15 +79,31 @@ def spec_from_scene(scene, options: dict):
 
 def scheduler_of(scene, options: dict) -> str | None:
     """The Dask scheduler address: ``--set scheduler=...`` or ``SHAKEDOWN_SCHEDULER``; a scene
-    file that names one is refused (trusted like code, see the module docstring)."""
+    file that names one is refused (trusted like code, see the module docstring).
+
+    The scene *file* is read again from disk to tell its own keys from ``--set`` values (which
+    are merged into the parsed scene); a scene given as a string has no file and its own
+    ``scheduler`` key is refused the same way.
+    """
     import os
 
     from ...model.errors import SceneError
+    from ..files import tomllib
 
-    raw = (getattr(scene, "raw", None) or {}).get("analyses", {}).get("sweep", {})
-    if raw.get("scheduler"):
+    path = getattr(scene, "path", None)
+    if path is not None and os.path.isfile(path):
+        try:
+            raw = tomllib.loads(open(path, encoding="utf-8").read())
+        except (OSError, ValueError):  # it was parsed once already; nothing to refuse
+            raw = {}
+    elif path is None:
+        raw = getattr(scene, "raw", None) or {}
+    else:
+        raw = {}
+    own = raw.get("analyses", {}).get("sweep", {}) if isinstance(raw, dict) else {}
+    if isinstance(own, dict) and own.get("scheduler"):
         raise SceneError(
-            f"{scene.label}: [analyses.sweep] scheduler = {raw['scheduler']!r}: a scene file may "
+            f"{scene.label}: [analyses.sweep] scheduler = {own['scheduler']!r}: a scene file may "
             "not name a Dask scheduler (connecting to one is trusted like running its code); "
             "remove the key and pass --set scheduler=ADDRESS or set SHAKEDOWN_SCHEDULER")
     return options.get("scheduler") or os.environ.get("SHAKEDOWN_SCHEDULER") or None
