@@ -37,9 +37,9 @@ EXPONENT = st.floats(min_value=-6.0, max_value=12.0, allow_nan=False)
 PENDING_BOUNDS = pytest.mark.xfail(
     reason="scale-free bounds/step solver pending on its branch", strict=False)
 
-FAST = settings(max_examples=15, deadline=None, derandomize=True,
+FAST = settings(max_examples=15, deadline=None,
                 suppress_health_check=[HealthCheck.too_slow])
-SLOW = settings(max_examples=6, deadline=None, derandomize=True,
+SLOW = settings(max_examples=6, deadline=None,
                 suppress_health_check=[HealthCheck.too_slow])
 
 
