@@ -202,7 +202,7 @@ BASE = {
 KEYS = [("scene", "name"), ("model", "kind"), ("model", "A"), ("model", "friction"),
         ("model", "file"), ("model", "symmetry_rtol"), ("load", "q0"), ("load", "q_cos"),
         ("load", "file"), ("load", "q1"), ("analyses", "bounds"), ("analyses", "bogus"),
-        ("model", "B"), ("load", "p0")]
+        ("model", "B"), ("load", "p0"), ("analyses", "cycles"), ("analyses", "stability")]
 
 
 def toml_value(v):
@@ -241,8 +241,12 @@ def scenes(draw):
         table, key = draw(st.sampled_from(KEYS))
         if table == "analyses":
             scene["analyses"][key] = draw(st.dictionaries(
-                st.sampled_from(["plots", "lam", "max_cycles", "steps_per_cycle", "nope"]),
-                VALUES, max_size=2))
+                st.sampled_from(["lam", "max_cycles", "steps_per_cycle", "nope", "initial_slip",
+                                 "method", "tol", "n_initial_states", "seed", "chi", "mu",
+                                 "partition", "states", "time", "load_factor", "growth_rate_max",
+                                 "n_growth_rates", "adjacency", "plot_lams", "sampling_scale"]),
+                VALUES, max_size=3))
+            scene["analyses"][key]["plots"] = False  # figures are not what is fuzzed here
         else:
             scene[table][key] = draw(VALUES)
     return to_toml(scene)
