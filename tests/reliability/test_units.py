@@ -142,6 +142,21 @@ def test_cycles_do_not_depend_on_units(name, factor, ek, ef):
     assert run.sampling_error / cf == pytest.approx(ref.sampling_error, rel=1e-12)
 
 
+@pytest.mark.parametrize("ek, ef", [(12.0, -6.0), (-6.0, 12.0), (np.log10(3.7e9), -4.9)])
+def test_event_path_does_not_depend_on_units(ek, ef):
+    s, load = SYSTEMS["two_node"]
+    lam = 1.5 * REF_BOUNDS["two_node"].lam2
+    samples = load.to_samples(32)
+    ref = sd.solve_cycles(s, samples, lam, method="events")
+    ck, cf = 10.0**ek, 10.0**ef
+    run = sd.solve_cycles(*rescaled(s, samples, ck, cf), lam, method="events")
+    assert (run.status, run.period, run.shook_down) == (ref.status, ref.period, ref.shook_down)
+    assert np.array_equal(run.stuck_nodes, ref.stuck_nodes)
+    # exact path between samples: events located to rounding, steady test at tol = 1e-10
+    assert run.steady_dissipation * ck / cf**2 == pytest.approx(ref.steady_dissipation,
+                                                                rel=1e-7)
+
+
 @pytest.mark.parametrize("ek, ef", [(12.0, -6.0), (np.log10(3.7e9), np.log10(1.3e-5))])
 def test_steady_cycle_solver_does_not_depend_on_units(ek, ef):
     from shakedown.evolution import steady_cycle
