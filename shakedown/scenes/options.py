@@ -126,6 +126,12 @@ def apply_overrides(scene, names, overrides):
         msg = str(exc)
         msg = msg.replace(scene.label, label, 1) if scene.label in msg else f"{label}: {msg}"
         raise SceneError(msg) from None
+    # options that choose where a run executes (the sweep's Dask scheduler) are trusted only
+    # from the command line: keep them out of the scene's raw tables, which are what a scene
+    # file said (and what the analysis checks for such keys)
+    for name, table in new.raw.get("analyses", {}).items():
+        for key in getattr(analysis_module(name, label), "WHERE_IT_RUNS", ()):
+            table.pop(key, None)
     return new
 
 
