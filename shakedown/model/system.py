@@ -165,6 +165,10 @@ class DiscreteSystem:
         B = _as_matrix("B", self.B, n)
         C = _as_matrix("C", self.C, n)
         f = _as_friction(self.friction, n)
+        rtol = self.symmetry_rtol
+        if isinstance(rtol, bool) or not isinstance(rtol, (int, float, np.floating)) \
+                or not 0 <= rtol < 1:
+            raise InputError(f"symmetry_rtol must be a number in [0, 1); got {rtol!r}")
         scale = max(np.abs(A).max(), np.abs(C).max(), np.abs(B).max(), np.finfo(float).tiny)
         for name, M in (("A", A), ("C", C)):
             asym = np.abs(M - M.T).max()

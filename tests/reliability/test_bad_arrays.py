@@ -170,3 +170,13 @@ def test_shakedown_within_sampling_error_is_flagged(two_node):
     # far below lam1 a shakedown is certain and not flagged
     run = sd.solve_cycles(s, load, 0.2)
     assert run.shook_down and not run.within_sampling_error
+
+
+def test_cycles_verdict_says_within_sampling_error(two_node):
+    from shakedown.scenes.analyses.cycles import cycles_verdict
+
+    s, load = two_node
+    lam = sd.shakedown_bounds(s, load).lam2 * (1 + 1e-5)
+    run = sd.solve_cycles(s, load, lam, initial_slip=[0.3, 0.3])
+    assert run.shook_down and run.within_sampling_error  # this state is one of those flagged
+    assert "within the load's sampling error" in cycles_verdict(run, lam)

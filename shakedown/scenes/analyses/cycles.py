@@ -259,6 +259,10 @@ def cycles_verdict(run, lam: float, energy: str = "[force x length]", study=None
         k = max(int(run.cycles_to_steady), 0)
         when = "from the first cycle on" if k == 0 else f"after {k} cycle{'s' * (k != 1)}"
         text = f"{at}, it shook down {when}: no node slips in the steady state (W = 0)."
+        if getattr(run, "within_sampling_error", False):  # issue 10 item 9
+            text += (f" But this lies within the load's sampling error "
+                     f"({run.sampling_error:.3g}): the exact load breaks a stick constraint at "
+                     "the final state; raise steps_per_cycle to decide.")
     elif run.status == "periodic":
         slip = _slipping_nodes(run)
         n = int(np.size(run.final_slip))

@@ -190,7 +190,11 @@ def build(model: dict, load: dict, scene_dir: Path):
         raise SceneError("[model] key 'friction' is missing (a number >= 0 or a list of N)")
     kwargs = {}
     if "symmetry_rtol" in model:
-        kwargs["symmetry_rtol"] = float(model["symmetry_rtol"])
+        tol = model["symmetry_rtol"]
+        if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not 0 <= tol < 1:
+            raise SceneError(f"[model] key 'symmetry_rtol' = {tol!r} must be a number in [0, 1) "
+                             "(relative asymmetry accepted, e.g. 1e-8)")
+        kwargs["symmetry_rtol"] = float(tol)
     try:
         system = DiscreteSystem(data["A"], data["B"], data["C"], data["friction"], **kwargs)
     except InputError as exc:
