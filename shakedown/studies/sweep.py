@@ -364,7 +364,7 @@ def _realisation_task(spec: SweepSpec, r: int) -> dict:
     t0 = time.perf_counter()
     cracks, model, load = realisation_model(spec, r)
     t1 = time.perf_counter()
-    b = shakedown_bounds(model.system, load)
+    b = shakedown_bounds(model.system, load, adjacency=True)  # lam_adj is opt-in
     a = np.asarray(cracks.half_lengths, float)
     return dict(realisation=r, n_cracks=int(a.size), abar=float(a.mean()),
                 lam1=float(b.lam1), lam2=float(b.lam2), lam_adj=float(b.lam_adj),

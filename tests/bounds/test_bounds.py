@@ -109,8 +109,8 @@ def test_against_cvxpy(seed):
 @pytest.mark.parametrize("n,seed", [(4, 0), (12, 1), (40, 2)])
 def test_auto_agrees_with_highs(n, seed):
     system, load = random_problem(n, seed)
-    a = shakedown_bounds(system, load)
-    h = shakedown_bounds(system, load, solver="highs")
+    a = shakedown_bounds(system, load, adjacency=True)
+    h = shakedown_bounds(system, load, solver="highs", adjacency=True)
     assert a.status == h.status == "bounded"
     for name in ("lam1", "lam2", "lam_adj", "lam_separation", "safe_margin"):
         assert getattr(a, name) == pytest.approx(getattr(h, name), rel=1e-6), name
@@ -136,8 +136,8 @@ def test_permutation_invariance():
     perm = np.random.default_rng(0).permutation(7)
     ix = np.ix_(perm, perm)
     s2 = sd.DiscreteSystem(system.A[ix], system.B[ix], system.C[ix], system.friction[perm])
-    b1 = shakedown_bounds(system, load)
-    b2 = shakedown_bounds(s2, load.permuted(perm))
+    b1 = shakedown_bounds(system, load, adjacency=True)
+    b2 = shakedown_bounds(s2, load.permuted(perm), adjacency=True)
     assert b2.lam1 == pytest.approx(b1.lam1, rel=1e-9)
     assert b2.lam2 == pytest.approx(b1.lam2, rel=1e-9)
     assert b2.lam_adj == pytest.approx(b1.lam_adj, rel=1e-9)

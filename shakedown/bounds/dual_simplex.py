@@ -1,0 +1,351 @@
+"""Lock-step dense dual simplex for many LPs ``max e.x s.t. A x <= b`` that share ``A, b, e``.
+
+The LPs differ by rows that must hold with equality (the activity-interval and adjacency LPs of
+the bounds engine) and all start from one dual-feasible basis ``T0``.  A basis is a set ``T`` of
+``n`` rows (with signs) with ``B = A_T`` non-singular, ``x = B^-1 b_T`` and multipliers
+``y = B^-T e >= 0``.  A violated row enters; the ratio test ``y_r / alpha_r`` with
+``alpha = B^-T a_p`` picks the position ``r`` that leaves.
+
+Basis update (issue 14): ``B0^-1`` and the tableau ``W = B0^-T A^T`` are formed once.  After
+some pivots ``B = B0 + P^T Delta`` differs from ``B0`` in the ``k`` positions listed by ``P``, and
+with ``H = Delta B0^-1`` (read off ``W``: row ``i`` is ``s_r W[:, T_r]^T - e_r^T``) the
+Sherman-Morrison-Woodbury formula gives
+
+    B^-T a = w - H^T S^-T w[P],     B^-1 c = B0^-1 (c - P^T S^-1 H c),    S = I_k + H P^T,
+
+with ``w = B0^-T a`` a column of ``W``.  ``S^-1`` (``k x k``, ``k <=`` pivots of that LP) is kept
+by bordering (a new position) or a rank-one update (a position changed again) and recomputed
+from ``H`` every :data:`REINVERT_EVERY` pivots (periodic reinversion).  One pivot costs
+``O(k n)`` for ``alpha`` plus one row of ``A B^-1`` (``O(n R)``, a matrix product for all LPs
+of a round), vectorised over the LPs: no Python loop over earlier pivots.  Memory is
+``O(L (k n + R))`` for the ``L`` LPs of a chunk, whatever the total number of LPs.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import scipy.linalg as sla
+
+from .certificates import CERT_TOL, FEAS_TOL, PIVOT_TOL, DenseAnswer, batch_residuals
+
+#: Pivots between two recomputations of the capacitance inverse ``S^-1`` from ``H``.
+REINVERT_EVERY = 16
+#: Bytes of working storage per chunk of LPs solved together.
+CHUNK_BYTES = 2**27
+
+
+class Tableau:
+    """The shared data of a family of LPs: rows ``A`` (unit-norm), ``b``, start basis ``T0``.
+
+    Parameters
+    ----------
+    A : ndarray, shape (R, n)
+    b : ndarray, shape (R,)
+    e : ndarray, shape (n,)
+        Objective (maximised).
+    T0 : ndarray of int, shape (n,)
+        Starting basis; ``A_T0^-T e >= 0`` up to rounding (dual feasible) is required.
+    """
+
+    def __init__(self, A, b, e, T0):
+        self.rownorm = np.linalg.norm(A, axis=1)
+        self.rownorm[self.rownorm == 0] = 1.0
+        self.A = A / self.rownorm[:, None]
+        self.b = b / self.rownorm
+        self.e = np.asarray(e, float)
+        self.T0 = np.asarray(T0, int)
+        R, n = self.A.shape
+        self.R, self.n = R, n
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", sla.LinAlgWarning)
+            lu = sla.lu_factor(self.A[self.T0], check_finite=False)
+        d = np.abs(np.diag(lu[0]))
+        self.singular = bool(not d.min() > 1e-13 * d.max())
+        if self.singular:
+            self.y0 = np.full(n, -np.inf)
+            return
+        self.Binv = sla.lu_solve(lu, np.eye(n), check_finite=False)  # A_T0^-1
+        self.y0 = self.Binv.T @ self.e
+        self.W = self.Binv.T @ self.A.T  # (n, R): column i = row i in basis coordinates
+        self.x0 = self.Binv @ self.b[self.T0]
+        self.act0 = self.A @ self.x0
+        self.scale_x = max(float(np.abs(self.x0).max(initial=0.0)), 1.0)
+
+    @property
+    def dual_feasible(self) -> bool:
+        ys = max(float(np.abs(self.y0).max()), np.finfo(float).tiny)
+        return bool(self.y0.min(initial=0.0) >= -1e-9 * ys)
+
+
+def batch_dual_simplex(tab: Tableau, equal_rows, *, max_pivots=None, chunk=None):
+    """Solve ``max e.x s.t. A x <= b`` plus, for LP ``l``, ``A_k x = b_k`` for ``k`` in
+    ``equal_rows[l]``, all from the basis ``tab.T0``, in lock-step, a chunk at a time.
+
+    Returns a list of :class:`~.certificates.DenseAnswer` (multipliers in the caller's row
+    units), in the order of ``equal_rows``.
+    """
+    n, R = tab.n, tab.R
+    if max_pivots is None:
+        max_pivots = max(60, 3 * n)
+    if chunk is None:
+        # working storage per LP: H (k x n, k grows to ~64 typically), act/masks (R), S^-1
+        chunk = int(max(8, min(1024, CHUNK_BYTES / (8 * (64 * n + 6 * R + 64 * 64)))))
+    out = []
+    for start in range(0, len(equal_rows), chunk):
+        out.extend(_batch(tab, list(equal_rows[start : start + chunk]), max_pivots))
+    return out
+
+
+class _State:
+    """Working arrays of the LPs of one chunk that are still running (compacted on retire).
+
+    ``Sinv`` is kept equal to the identity outside the leading ``k x k`` block of each LP and
+    the rows of ``H`` beyond ``k`` are zero, so the products below need no masks except where
+    ``pos`` (0 beyond ``k``) is used to gather.
+    """
+
+    _FIELDS = ("ids", "bas", "sgn", "eqmask", "free", "inbasis", "y", "act", "k", "pos",
+               "where", "H", "Sinv")
+
+    def __init__(self, tab, eqs, cap):
+        L, n, R = len(eqs), tab.n, tab.R
+        self.ids = np.arange(L)
+        self.bas = np.tile(tab.T0, (L, 1))
+        self.sgn = np.ones((L, n))
+        self.eqmask = np.zeros((L, R), bool)
+        for l, rows in enumerate(eqs):
+            self.eqmask[l, list(rows)] = True
+        self.free = self.eqmask[np.arange(L)[:, None], self.bas]
+        self.inbasis = np.zeros((L, R), bool)
+        self.inbasis[np.arange(L)[:, None], self.bas] = True
+        self.y = np.tile(tab.y0, (L, 1))
+        self.act = np.tile(tab.act0, (L, 1))
+        self.k = np.zeros(L, int)  # changed positions per LP
+        self.pos = np.zeros((L, cap), int)  # positions changed (first k valid)
+        self.where = np.full((L, n), -1)  # position -> index in pos (or -1)
+        self.H = np.zeros((L, cap, n))
+        self.Sinv = np.tile(np.eye(cap), (L, 1, 1))
+
+    @property
+    def ku(self) -> int:
+        """Leading block size in use: ``max k`` (at least 1)."""
+        return max(1, int(self.k.max(initial=0)))
+
+    def keep(self, mask):
+        for f in self._FIELDS:
+            setattr(self, f, getattr(self, f)[mask])
+
+    def grow(self):
+        L, cap, n = self.H.shape
+        new = 2 * cap
+        H = np.zeros((L, new, n))
+        H[:, :cap] = self.H
+        S = np.tile(np.eye(new), (L, 1, 1))
+        S[:, :cap, :cap] = self.Sinv
+        pos = np.zeros((L, new), int)
+        pos[:, :cap] = self.pos
+        self.H, self.Sinv, self.pos = H, S, pos
+
+    def gather(self, v, ku):
+        """``v[P]`` per LP, shape (l, ku), zero beyond each LP's ``k``."""
+        out = np.take_along_axis(v, self.pos[:, :ku], axis=1)
+        out[np.arange(ku)[None, :] >= self.k[:, None]] = 0.0
+        return out
+
+    def reinvert(self):
+        """``S^-1 = (I + H[:, P])^-1`` recomputed from ``H`` on the leading block."""
+        ku = self.ku
+        Hp = np.take_along_axis(self.H[:, :ku, :], self.pos[:, None, :ku], axis=2)
+        Hp[np.broadcast_to(np.arange(ku)[None, None, :] >= self.k[:, None, None], Hp.shape)] = 0
+        self.Sinv[:, :ku, :ku] = np.linalg.inv(Hp + np.eye(ku)[None])
+
+
+def _batch(tab, eqs, max_pivots):  # noqa: C901  (one coherent pivot loop)
+    n = tab.n
+    L = len(eqs)
+    A, b, W = tab.A, tab.b, tab.W
+    tolx = FEAS_TOL * tab.scale_x
+    st = _State(tab, eqs, cap=min(16, n))
+    out_bas = np.zeros((L, n), int)
+    out_sgn = np.ones((L, n))
+    out_y = np.zeros((L, n))
+    out_x = np.zeros((L, n))
+    out_piv = np.zeros(L, int)
+    status = np.array(["running"] * L, dtype=object)
+    npiv = 0  # lock-step: every running LP has made the same number of pivot rounds
+
+    def retire(mask, label):
+        """Record the LPs of ``mask`` with status ``label`` (str or per-LP) and drop them."""
+        if not mask.any():
+            return
+        ids = st.ids[mask]
+        status[ids] = label if isinstance(label, str) else np.asarray(label)[mask]
+        out_bas[ids], out_sgn[ids], out_y[ids], out_piv[ids] = (
+            st.bas[mask], st.sgn[mask], st.y[mask], npiv)
+        # x = B^-1 c = B0^-1 (c - P^T S^-1 H c),  c = sgn * b_T
+        c = st.sgn[mask] * b[st.bas[mask]]
+        ku = st.ku
+        Hc = np.matmul(st.H[mask, :ku], c[:, :, None])[:, :, 0]
+        corr = np.matmul(st.Sinv[mask, :ku, :ku], Hc[:, :, None])[:, :, 0]
+        corr[np.arange(ku)[None, :] >= st.k[mask][:, None]] = 0.0
+        np.add.at(c, (np.repeat(np.arange(c.shape[0]), ku), st.pos[mask, :ku].ravel()),
+                  -corr.ravel())
+        out_x[ids] = c @ tab.Binv.T
+        st.keep(~mask)
+
+    while st.ids.size:
+        if npiv >= max_pivots:
+            retire(np.ones(st.ids.size, bool), "failed")
+            break
+        l = st.ids.size
+        idx = np.arange(l)
+        # ---- pricing: pending equalities first, then the most violated inequality
+        viol = st.act - b
+        pend = st.eqmask & ~st.inbasis
+        eqv = np.where(pend, np.abs(viol), 0.0)
+        ineq = np.where(st.inbasis | st.eqmask, -np.inf, viol)
+        p_eq = np.argmax(eqv, axis=1)
+        has_eq = eqv[idx, p_eq] > tolx
+        p_in = np.argmax(ineq, axis=1)
+        vin = ineq[idx, p_in] > tolx
+        pend_any = pend.any(axis=1)
+        # an equality row already satisfied still enters (it becomes basic and free)
+        done = ~(has_eq | vin | pend_any)
+        if done.any():
+            retire(done, "optimal")
+            keep = ~done
+            p_eq, p_in, has_eq, vin = p_eq[keep], p_in[keep], has_eq[keep], vin[keep]
+            l = st.ids.size
+            idx = np.arange(l)
+            if not l:
+                break
+        p = np.where(has_eq, p_eq, np.where(vin, p_in, p_eq))
+        zero_eq = ~(has_eq | vin)
+        sp = np.where(st.eqmask[idx, p] & (st.act[idx, p] < b[p]), -1.0, 1.0)  # entering sign
+        # ---- alpha = B^-T (sp a_p) = w - H^T S^-T w[P]
+        w = W[:, p].T * sp[:, None]
+        ku = st.ku
+        g = np.matmul(st.gather(w, ku)[:, None, :], st.Sinv[:, :ku, :ku])  # (S^-T w[P])^T
+        alpha = w - np.matmul(g, st.H[:, :ku, :])[:, 0, :]
+        # ---- ratio test over non-free positions with alpha > tol
+        flip = zero_eq & ~np.any((alpha > PIVOT_TOL) & ~st.free, axis=1)
+        sp[flip] *= -1.0
+        alpha[flip] *= -1.0
+        w[flip] *= -1.0
+        ok = (alpha > PIVOT_TOL) & ~st.free
+        ratio = np.where(ok, np.maximum(st.y, 0.0) / np.where(ok, alpha, 1.0), np.inf)
+        tmin = ratio.min(axis=1)
+        infeas = ~np.isfinite(tmin)
+        if infeas.any():
+            # Farkas: the entering row cannot be satisfied; a satisfied equality that no pivot
+            # can bring in is implied by the free rows (rare: let HiGHS decide)
+            retire(infeas, np.where(zero_eq, "failed", "infeasible"))
+            go = ~infeas
+            p, sp, alpha, w, ratio, tmin, ok = (p[go], sp[go], alpha[go], w[go], ratio[go],
+                                                tmin[go], ok[go])
+            l = st.ids.size
+            idx = np.arange(l)
+            if not l:
+                break
+        # Harris-style tie break: among ratios within a small tolerance take the largest alpha
+        near = ok & (ratio <= tmin[:, None] + 1e-12 * (1 + np.abs(tmin[:, None])))
+        r = np.argmax(np.where(near, alpha, -np.inf), axis=1)
+        ar = alpha[idx, r]
+        t_dual = np.maximum(st.y[idx, r], 0.0) / ar
+        # ---- primal step: row p becomes tight; direction B^-1 e_r = B0^-1 u,
+        # u = e_r - P^T S^-1 H e_r
+        s = sp * (st.act[idx, p] - b[p]) / ar
+        ku = st.ku
+        h = np.matmul(st.Sinv[:, :ku, :ku], st.H[idx, :ku, r][:, :, None])[:, :, 0]
+        h[np.arange(ku)[None, :] >= st.k[:, None]] = 0.0
+        u = np.zeros((l, n))
+        u[idx, r] = 1.0
+        np.add.at(u, (np.repeat(idx, ku), st.pos[:, :ku].ravel()), -h.ravel())
+        st.act -= s[:, None] * (u @ W)
+        # ---- dual and basis update
+        st.y -= t_dual[:, None] * alpha
+        st.y[idx, r] = t_dual
+        st.inbasis[idx, st.bas[idx, r]] = False
+        st.inbasis[idx, p] = True
+        st.bas[idx, r] = p
+        st.sgn[idx, r] = sp
+        st.free[idx, r] = st.eqmask[idx, p]
+        _update_capacitance(st, idx, r, w)
+        npiv += 1
+        if npiv % REINVERT_EVERY == 0:
+            st.reinvert()
+    # ---- certificates, checked for all LPs at once (matrix products)
+    Y = np.zeros((L, tab.R))
+    rows = np.arange(L)[:, None]
+    np.add.at(Y, (np.broadcast_to(rows, out_bas.shape), out_bas), out_y * out_sgn)
+    eqm = np.zeros((L, tab.R), bool)
+    for l, rows_l in enumerate(eqs):
+        eqm[l, list(rows_l)] = True
+    res = batch_residuals(A, b, tab.e, out_x, Y, eqm)
+    answers = []
+    for l in range(L):
+        label = status[l]
+        if label == "optimal" and max(res[l]) > CERT_TOL:
+            label = "failed"
+        rr = tuple(float(v) for v in res[l]) if label == "optimal" else (np.nan,) * 4
+        answers.append(
+            DenseAnswer(label, out_x[l], Y[l] / tab.rownorm, out_bas[l].copy(),
+                        int(out_piv[l]), rr)
+        )
+    return answers
+
+
+def _update_capacitance(st, idx, r, w):
+    """Record that position ``r`` of each LP now holds the row with ``B0^-T a = w``.
+
+    New position: ``H`` gains the row ``w - e_r`` and ``S^-1`` is bordered; a position changed
+    before: its ``H`` row is replaced and ``S^-1`` gets a Sherman-Morrison rank-one update.
+    """
+    hnew = w.copy()
+    hnew[idx, r] -= 1.0
+    j = st.where[idx, r]
+    new = j < 0
+    if new.any() and (st.k[new] >= st.H.shape[1]).any():
+        st.grow()
+    # --- replace (rank-one): S_new = S + e_j d^T, d = hnew[P] - H_j[P]
+    rep = np.flatnonzero(~new)
+    if rep.size:
+        ku = st.ku
+        jj = j[rep]
+        m = np.arange(rep.size)
+        sub_k, sub_pos = st.k[rep], st.pos[rep, :ku]
+        d = np.take_along_axis(hnew[rep], sub_pos, axis=1) - np.take_along_axis(
+            st.H[rep, jj], sub_pos, axis=1)
+        d[np.arange(ku)[None, :] >= sub_k[:, None]] = 0.0
+        Si = st.Sinv[rep, :ku, :ku]
+        col = Si[m, :, jj]  # S^-1 e_j
+        row = np.matmul(d[:, None, :], Si)[:, 0, :]  # d^T S^-1
+        den = 1.0 + row[m, jj]
+        st.Sinv[rep, :ku, :ku] = Si - col[:, :, None] * (row / den[:, None])[:, None, :]
+        st.H[rep, jj] = hnew[rep]
+    # --- border: S_new = [[S, bcol], [c^T, dd]], bcol = H[:k, r], c = hnew[P], dd = 1 + hnew_r
+    add = np.flatnonzero(new)
+    if add.size:
+        kk = st.k[add]
+        ku = int(kk.max()) + 1
+        m = np.arange(add.size)
+        ra = r[add]
+        bcol = st.H[add, :ku, ra]  # rows beyond k are zero
+        cvec = np.take_along_axis(hnew[add], st.pos[add, :ku], axis=1)
+        cvec[np.arange(ku)[None, :] >= kk[:, None]] = 0.0
+        dd = w[add, ra]  # S_kk = 1 + hnew_r = w_r
+        Si = st.Sinv[add, :ku, :ku]
+        Sb = np.matmul(Si, bcol[:, :, None])[:, :, 0]
+        cS = np.matmul(cvec[:, None, :], Si)[:, 0, :]
+        sigma = dd - np.einsum("li,li->l", cvec, Sb)
+        Snew = Si + Sb[:, :, None] * (cS / sigma[:, None])[:, None, :]
+        Snew[m, :, kk] = -Sb / sigma[:, None]
+        Snew[m, kk, :] = -cS / sigma[:, None]
+        Snew[m, kk, kk] = 1.0 / sigma
+        st.Sinv[add, :ku, :ku] = Snew
+        st.H[add, kk] = hnew[add]
+        st.pos[add, kk] = ra
+        st.where[add, ra] = kk
+        st.k[add] += 1
