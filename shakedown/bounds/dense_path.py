@@ -23,9 +23,6 @@ from .constraints import ConstraintSet
 from .highs_path import RESIDUAL_NAMES, HighsModel
 from .outcome import PathOutcome, lam1_from_intervals, separation_outcome, value
 
-#: LPs per lock-step round of a family (answers of one round are shared with the next ones).
-ROUND = 64
-
 
 class _Book:
     """Counts LPs and iterations, keeps the worst residuals, builds HiGHS only if needed."""
@@ -58,8 +55,8 @@ class _Book:
 def _family(tab, groups, sense, book, lam_row):
     """Values of ``max`` (``sense="max"``) or ``min lam`` with the rows of each group tight.
 
-    ``tab`` is a dual-feasible start for the objective (``+lam`` or ``-lam``).  Groups are solved
-    in rounds of :data:`ROUND`, in order; an optimal basis that also solves later groups (module
+    ``tab`` is a dual-feasible start for the objective (``+lam`` or ``-lam``).  Groups are
+    started in order; an optimal basis that also solves groups not yet started (module
     docstring) answers them without a solve.  ``nan`` = infeasible (never active).
     """
     out = np.full(len(groups), np.nan)
@@ -68,23 +65,22 @@ def _family(tab, groups, sense, book, lam_row):
     for g, rows in enumerate(groups):
         for r in rows:
             by_row.setdefault(r, []).append(g)
-    todo = list(range(len(groups)))
-    while todo:
-        batch = [g for g in todo if not done[g]][:ROUND]
-        if not batch:
-            break
-        answers = dense_lp.batch_dual_simplex(tab, [groups[g] for g in batch])
-        for g, ans in zip(batch, answers, strict=True):
-            book.record(ans)
-            if ans.status == "optimal":
-                out[g] = ans.x[-1]
-                _share(ans, g, groups, by_row, out, done, sense, lam_row)
-            elif ans.status == "infeasible":
-                out[g] = np.nan
-            else:
-                out[g] = value(book.highs(sense, groups[g]))
-            done[g] = True
-        todo = [g for g in todo if not done[g]]
+    failed = []
+
+    def on_answer(g, ans):
+        book.record(ans)
+        done[g] = True
+        if ans.status == "optimal":
+            out[g] = ans.x[-1]
+            _share(ans, g, groups, by_row, out, done, sense, lam_row)
+        elif ans.status == "infeasible":
+            out[g] = np.nan
+        else:
+            failed.append(g)
+
+    dense_lp.batch_dual_simplex(tab, groups, on_answer=on_answer, skip=lambda g: done[g])
+    for g in failed:  # not certified: the reference solver decides
+        out[g] = value(book.highs(sense, groups[g]))
     return out
 
 
@@ -98,7 +94,7 @@ def _share(ans, g, groups, by_row, out, done, sense, lam_row):
     at_zero = sense == "min" and lam_row in basic  # the vertex has lam = 0 exactly
     for r in T:
         for h in by_row.get(int(r), ()):
-            if done[h] or h == g:
+            if done[h]:
                 continue
             rows = set(groups[h])
             if rows <= basic and (at_zero or neg <= rows):

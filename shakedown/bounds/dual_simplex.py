@@ -79,9 +79,15 @@ class Tableau:
         return bool(self.y0.min(initial=0.0) >= -1e-9 * ys)
 
 
-def batch_dual_simplex(tab: Tableau, equal_rows, *, max_pivots=None, chunk=None):
+def batch_dual_simplex(tab: Tableau, equal_rows, *, max_pivots=None, width=None, chunk=None,
+                       on_answer=None, skip=None):
     """Solve ``max e.x s.t. A x <= b`` plus, for LP ``l``, ``A_k x = b_k`` for ``k`` in
-    ``equal_rows[l]``, all from the basis ``tab.T0``, in lock-step, a chunk at a time.
+    ``equal_rows[l]``, all from the basis ``tab.T0``, in lock-step.
+
+    ``width`` LPs pivot together (a pool: an LP that finishes frees its slot for the next one
+    in order, so rounds stay full whatever the spread of pivot counts).  ``on_answer(l, answer)``
+    is called as each LP finishes; ``skip(l)`` is asked before LP ``l`` is started (``True``:
+    not solved, its entry is ``None``), so a caller can share answers between LPs.
 
     Returns a list of :class:`~.certificates.DenseAnswer` (multipliers in the caller's row
     units), in the order of ``equal_rows``.
@@ -89,13 +95,12 @@ def batch_dual_simplex(tab: Tableau, equal_rows, *, max_pivots=None, chunk=None)
     n, R = tab.n, tab.R
     if max_pivots is None:
         max_pivots = max(60, 3 * n)
-    if chunk is None:
-        # working storage per LP: H (k x n, k grows to ~64 typically), act/masks (R), S^-1
-        chunk = int(max(8, min(1024, CHUNK_BYTES / (8 * (64 * n + 6 * R + 64 * 64)))))
-    out = []
-    for start in range(0, len(equal_rows), chunk):
-        out.extend(_batch(tab, list(equal_rows[start : start + chunk]), max_pivots))
-    return out
+    if width is None:
+        width = chunk
+    if width is None:
+        # working storage per LP: H (k x n, k up to ~100 typically), act/masks (R), S^-1
+        width = int(max(8, min(256, CHUNK_BYTES / (8 * (100 * n + 6 * R + 100 * 100)))))
+    return _batch(tab, list(equal_rows), max_pivots, int(width), on_answer, skip)
 
 
 class _State:
@@ -106,27 +111,47 @@ class _State:
     ``pos`` (0 beyond ``k``) is used to gather.
     """
 
-    _FIELDS = ("ids", "bas", "sgn", "eqmask", "free", "inbasis", "y", "act", "k", "pos",
-               "where", "H", "Sinv")
+    _FIELDS = ("ids", "piv", "bas", "sgn", "eqmask", "free", "inbasis", "y", "act", "k",
+               "pos", "where", "H", "Sinv")
 
-    def __init__(self, tab, eqs, cap):
-        L, n, R = len(eqs), tab.n, tab.R
-        self.ids = np.arange(L)
-        self.bas = np.tile(tab.T0, (L, 1))
-        self.sgn = np.ones((L, n))
-        self.eqmask = np.zeros((L, R), bool)
+    def __init__(self, tab, cap):
+        n, R = tab.n, tab.R
+        self.tab = tab
+        self.ids = np.zeros(0, int)
+        self.piv = np.zeros(0, int)
+        self.bas = np.zeros((0, n), int)
+        self.sgn = np.zeros((0, n))
+        self.eqmask = np.zeros((0, R), bool)
+        self.free = np.zeros((0, n), bool)
+        self.inbasis = np.zeros((0, R), bool)
+        self.y = np.zeros((0, n))
+        self.act = np.zeros((0, R))
+        self.k = np.zeros(0, int)  # changed positions per LP
+        self.pos = np.zeros((0, cap), int)  # positions changed (first k valid)
+        self.where = np.zeros((0, n), int)  # position -> index in pos (or -1)
+        self.H = np.zeros((0, cap, n))
+        self.Sinv = np.zeros((0, cap, cap))
+
+    def admit(self, ids, eqs):
+        """Append fresh LPs (start basis ``T0``) with ids ``ids`` and equality rows ``eqs``."""
+        tab, L = self.tab, len(ids)
+        n, R = tab.n, tab.R
+        cap = self.H.shape[1]
+        eqmask = np.zeros((L, R), bool)
         for l, rows in enumerate(eqs):
-            self.eqmask[l, list(rows)] = True
-        self.free = self.eqmask[np.arange(L)[:, None], self.bas]
-        self.inbasis = np.zeros((L, R), bool)
-        self.inbasis[np.arange(L)[:, None], self.bas] = True
-        self.y = np.tile(tab.y0, (L, 1))
-        self.act = np.tile(tab.act0, (L, 1))
-        self.k = np.zeros(L, int)  # changed positions per LP
-        self.pos = np.zeros((L, cap), int)  # positions changed (first k valid)
-        self.where = np.full((L, n), -1)  # position -> index in pos (or -1)
-        self.H = np.zeros((L, cap, n))
-        self.Sinv = np.tile(np.eye(cap), (L, 1, 1))
+            eqmask[l, list(rows)] = True
+        bas = np.tile(tab.T0, (L, 1))
+        inbasis = np.zeros((L, R), bool)
+        inbasis[:, tab.T0] = True
+        fresh = dict(
+            ids=np.asarray(ids, int), piv=np.zeros(L, int), bas=bas, sgn=np.ones((L, n)),
+            eqmask=eqmask, free=eqmask[:, tab.T0], inbasis=inbasis,
+            y=np.tile(tab.y0, (L, 1)), act=np.tile(tab.act0, (L, 1)), k=np.zeros(L, int),
+            pos=np.zeros((L, cap), int), where=np.full((L, n), -1),
+            H=np.zeros((L, cap, n)), Sinv=np.tile(np.eye(cap), (L, 1, 1)),
+        )
+        for f in self._FIELDS:
+            setattr(self, f, np.concatenate([getattr(self, f), fresh[f]]))
 
     @property
     def ku(self) -> int:
@@ -162,44 +187,68 @@ class _State:
         self.Sinv[:, :ku, :ku] = np.linalg.inv(Hp + np.eye(ku)[None])
 
 
-def _batch(tab, eqs, max_pivots):  # noqa: C901  (one coherent pivot loop)
+def _batch(tab, eqs, max_pivots, width, on_answer, skip):  # noqa: C901  (one pivot loop)
     n = tab.n
-    L = len(eqs)
     A, b, W = tab.A, tab.b, tab.W
     tolx = FEAS_TOL * tab.scale_x
-    st = _State(tab, eqs, cap=min(16, n))
-    out_bas = np.zeros((L, n), int)
-    out_sgn = np.ones((L, n))
-    out_y = np.zeros((L, n))
-    out_x = np.zeros((L, n))
-    out_piv = np.zeros(L, int)
-    status = np.array(["running"] * L, dtype=object)
-    npiv = 0  # lock-step: every running LP has made the same number of pivot rounds
+    st = _State(tab, cap=min(16, n))
+    answers = [None] * len(eqs)
+    queue = iter(range(len(eqs)))
+    exhausted = False
+    rounds = 0
+
+    def refill():
+        nonlocal exhausted
+        want = width - st.ids.size
+        new = []
+        while len(new) < want and not exhausted:
+            g = next(queue, None)
+            if g is None:
+                exhausted = True
+            elif skip is None or not skip(g):
+                new.append(g)
+        if new:
+            st.admit(new, [eqs[g] for g in new])
 
     def retire(mask, label):
-        """Record the LPs of ``mask`` with status ``label`` (str or per-LP) and drop them."""
+        """Certify and record the LPs of ``mask`` with status ``label`` (str or per-LP)."""
         if not mask.any():
             return
-        ids = st.ids[mask]
-        status[ids] = label if isinstance(label, str) else np.asarray(label)[mask]
-        out_bas[ids], out_sgn[ids], out_y[ids], out_piv[ids] = (
-            st.bas[mask], st.sgn[mask], st.y[mask], npiv)
+        labels = np.broadcast_to(np.asarray(label, dtype=object), mask.shape)[mask]
+        ids, bas, sgn, y = st.ids[mask], st.bas[mask], st.sgn[mask], st.y[mask]
         # x = B^-1 c = B0^-1 (c - P^T S^-1 H c),  c = sgn * b_T
-        c = st.sgn[mask] * b[st.bas[mask]]
+        c = sgn * b[bas]
         ku = st.ku
         Hc = np.matmul(st.H[mask, :ku], c[:, :, None])[:, :, 0]
         corr = np.matmul(st.Sinv[mask, :ku, :ku], Hc[:, :, None])[:, :, 0]
         corr[np.arange(ku)[None, :] >= st.k[mask][:, None]] = 0.0
         np.add.at(c, (np.repeat(np.arange(c.shape[0]), ku), st.pos[mask, :ku].ravel()),
                   -corr.ravel())
-        out_x[ids] = c @ tab.Binv.T
+        X = c @ tab.Binv.T
+        m = len(ids)
+        Y = np.zeros((m, tab.R))
+        np.add.at(Y, (np.repeat(np.arange(m), n), bas.ravel()), (y * sgn).ravel())
+        res = batch_residuals(A, b, tab.e, X, Y, st.eqmask[mask])
+        piv = st.piv[mask]
         st.keep(~mask)
+        for i, g in enumerate(ids):
+            lab = labels[i]
+            if lab == "optimal" and max(res[i]) > CERT_TOL:
+                lab = "failed"
+            rr = tuple(float(v) for v in res[i]) if lab == "optimal" else (np.nan,) * 4
+            answers[g] = DenseAnswer(lab, X[i], Y[i] / tab.rownorm, bas[i].copy(),
+                                     int(piv[i]), rr)
+            if on_answer is not None:
+                on_answer(int(g), answers[g])
 
+    refill()
     while st.ids.size:
-        if npiv >= max_pivots:
-            retire(np.ones(st.ids.size, bool), "failed")
-            break
+        retire(st.piv >= max_pivots, "failed")
+        if 4 * st.ids.size <= 3 * width:
+            refill()
         l = st.ids.size
+        if not l:
+            break
         idx = np.arange(l)
         # ---- pricing: pending equalities first, then the most violated inequality
         viol = st.act - b
@@ -220,7 +269,7 @@ def _batch(tab, eqs, max_pivots):  # noqa: C901  (one coherent pivot loop)
             l = st.ids.size
             idx = np.arange(l)
             if not l:
-                break
+                continue
         p = np.where(has_eq, p_eq, np.where(vin, p_in, p_eq))
         zero_eq = ~(has_eq | vin)
         sp = np.where(st.eqmask[idx, p] & (st.act[idx, p] < b[p]), -1.0, 1.0)  # entering sign
@@ -248,7 +297,7 @@ def _batch(tab, eqs, max_pivots):  # noqa: C901  (one coherent pivot loop)
             l = st.ids.size
             idx = np.arange(l)
             if not l:
-                break
+                continue
         # Harris-style tie break: among ratios within a small tolerance take the largest alpha
         near = ok & (ratio <= tmin[:, None] + 1e-12 * (1 + np.abs(tmin[:, None])))
         r = np.argmax(np.where(near, alpha, -np.inf), axis=1)
@@ -273,27 +322,10 @@ def _batch(tab, eqs, max_pivots):  # noqa: C901  (one coherent pivot loop)
         st.sgn[idx, r] = sp
         st.free[idx, r] = st.eqmask[idx, p]
         _update_capacitance(st, idx, r, w)
-        npiv += 1
-        if npiv % REINVERT_EVERY == 0:
+        st.piv += 1
+        rounds += 1
+        if rounds % REINVERT_EVERY == 0:
             st.reinvert()
-    # ---- certificates, checked for all LPs at once (matrix products)
-    Y = np.zeros((L, tab.R))
-    rows = np.arange(L)[:, None]
-    np.add.at(Y, (np.broadcast_to(rows, out_bas.shape), out_bas), out_y * out_sgn)
-    eqm = np.zeros((L, tab.R), bool)
-    for l, rows_l in enumerate(eqs):
-        eqm[l, list(rows_l)] = True
-    res = batch_residuals(A, b, tab.e, out_x, Y, eqm)
-    answers = []
-    for l in range(L):
-        label = status[l]
-        if label == "optimal" and max(res[l]) > CERT_TOL:
-            label = "failed"
-        rr = tuple(float(v) for v in res[l]) if label == "optimal" else (np.nan,) * 4
-        answers.append(
-            DenseAnswer(label, out_x[l], Y[l] / tab.rownorm, out_bas[l].copy(),
-                        int(out_piv[l]), rr)
-        )
     return answers
 
 
