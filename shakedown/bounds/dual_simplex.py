@@ -179,12 +179,14 @@ class _State:
         out[np.arange(ku)[None, :] >= self.k[:, None]] = 0.0
         return out
 
-    def reinvert(self):
-        """``S^-1 = (I + H[:, P])^-1`` recomputed from ``H`` on the leading block."""
-        ku = self.ku
-        Hp = np.take_along_axis(self.H[:, :ku, :], self.pos[:, None, :ku], axis=2)
-        Hp[np.broadcast_to(np.arange(ku)[None, None, :] >= self.k[:, None, None], Hp.shape)] = 0
-        self.Sinv[:, :ku, :ku] = np.linalg.inv(Hp + np.eye(ku)[None])
+    def reinvert(self, mask):
+        """``S^-1 = (I + H[:, P])^-1`` recomputed from ``H`` for the LPs of ``mask``."""
+        ku = max(1, int(self.k[mask].max()))
+        Hp = np.take_along_axis(self.H[mask, :ku, :], self.pos[mask, None, :ku], axis=2)
+        k = self.k[mask]
+        Hp[np.broadcast_to(np.arange(ku)[None, None, :] >= k[:, None, None], Hp.shape)] = 0
+        self.Sinv[np.flatnonzero(mask)[:, None, None], np.arange(ku)[None, :, None],
+                  np.arange(ku)[None, None, :]] = np.linalg.inv(Hp + np.eye(ku)[None])
 
 
 def _batch(tab, eqs, max_pivots, width, on_answer, skip):  # noqa: C901  (one pivot loop)
@@ -195,7 +197,6 @@ def _batch(tab, eqs, max_pivots, width, on_answer, skip):  # noqa: C901  (one pi
     answers = [None] * len(eqs)
     queue = iter(range(len(eqs)))
     exhausted = False
-    rounds = 0
 
     def refill():
         nonlocal exhausted
@@ -241,8 +242,7 @@ def _batch(tab, eqs, max_pivots, width, on_answer, skip):  # noqa: C901  (one pi
             if on_answer is not None:
                 on_answer(int(g), answers[g])
 
-    refill()
-    while st.ids.size:
+    while True:
         retire(st.piv >= max_pivots, "failed")
         if 4 * st.ids.size <= 3 * width:
             refill()
@@ -323,9 +323,9 @@ def _batch(tab, eqs, max_pivots, width, on_answer, skip):  # noqa: C901  (one pi
         st.free[idx, r] = st.eqmask[idx, p]
         _update_capacitance(st, idx, r, w)
         st.piv += 1
-        rounds += 1
-        if rounds % REINVERT_EVERY == 0:
-            st.reinvert()
+        due = st.piv % REINVERT_EVERY == 0  # each LP on its own schedule
+        if due.any():
+            st.reinvert(due)
     return answers
 
 

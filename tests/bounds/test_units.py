@@ -15,12 +15,11 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from test_bounds import check_certificate, random_problem
 
 import crack_networks as cn
 import shakedown as sd
 from shakedown.bounds import shakedown_bounds
-
-from test_bounds import check_certificate, random_problem
 
 RTOL = 1e-9
 factors = st.floats(1e-6, 1e12)
