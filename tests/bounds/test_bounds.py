@@ -272,6 +272,18 @@ def test_ill_conditioned_K():
     check_certificate(a)
 
 
+def test_n600_certified():
+    """A fast stand-in for the N = 2000 run in the default suite: every LP certified, the lam2
+    certificate checked independently, and lam1 the upper end of its limiting interval."""
+    system, load = random_problem(600, 0)
+    b = shakedown_bounds(system, load, separation=False)
+    assert b.status == "bounded" and 0 < b.lam1 <= b.lam2
+    assert max(b.residuals.values()) <= 1e-7
+    check_certificate(b)
+    assert b.lam1 == b.lam_high[b.limiting_constraint]
+    assert np.all(b.lam_low == 0.0)
+
+
 @pytest.mark.slow
 def test_n2000_finishes():
     system, load = random_problem(2000, 0)
@@ -322,3 +334,30 @@ def test_no_separation_limit_at_a_frictionless_node(solver):
         assert safe.any()
         best.append(np.max(0.3 - lam + (V[safe] @ B)[:, 0]))  # best min_t p_0 over safe states
     assert best[0] > 0 > best[1]
+
+
+# ---------------------------------------------------------------------- options
+def test_only_and_not_computed_fields():
+    """``lam_adj`` is opt-in; a quantity not computed is ``nan`` (and says so in JSON), never a
+    value that could be read as an answer (``inf`` means "the facets never meet")."""
+    system, load = random_problem(5, 2)
+    full = shakedown_bounds(system, load, adjacency=True)
+    default = shakedown_bounds(system, load)
+    assert np.isnan(default.lam_adj) and default.adjacency_node == -1
+    assert default.to_dict()["lam_adj"] == "nan" and default.to_dict()["adjacency_node"] is None
+    assert (default.lam1, default.lam2) == (full.lam1, full.lam2)
+    two = shakedown_bounds(system, load, only=("lam1", "lam2"))
+    assert (two.lam1, two.lam2) == (full.lam1, full.lam2)
+    assert np.isnan(two.lam_adj) and np.isnan(two.lam_separation)
+    adj = shakedown_bounds(system, load, only=["lam_adj"])
+    assert adj.lam_adj == full.lam_adj and np.isnan(adj.lam1) and np.isnan(adj.lam_high).all()
+    with pytest.raises(sd.InputError, match="only: unknown quantity 'lam3'"):
+        shakedown_bounds(system, load, only=("lam1", "lam3"))
+
+
+def test_people_read_nodes_from_1():
+    system, load = random_problem(3, 0)
+    b = shakedown_bounds(system, load, adjacency=True)
+    assert b.constraints.labels() == ["I_1", "I_2", "I_3", "II_1", "II_2", "II_3"]
+    assert list(b.table()["node"]) == [1, 2, 3, 1, 2, 3]
+    assert b.to_dict()["adjacency_node"] == b.adjacency_node + 1
