@@ -58,8 +58,9 @@ def worker(n: int, variant: str) -> dict:
         kw["adjacency"] = False
     if variant == "highs":
         kw["solver"] = "highs"
+    bounds = sd.shakedown_bounds  # import the analysis before the clock starts
     t = time.perf_counter()
-    b = sd.shakedown_bounds(model.system, load, **kw)
+    b = bounds(model.system, load, **kw)
     sec = time.perf_counter() - t
     return dict(n=n, variant=variant, seconds=sec, lam1=float(b.lam1), lam2=float(b.lam2),
                 lam_adj=float(b.lam_adj), n_lps=int(b.n_lps), iterations=int(b.simplex_iterations),

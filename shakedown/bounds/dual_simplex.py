@@ -343,31 +343,37 @@ def _update_capacitance(st, idx, r, w):
         st.grow()
     # --- replace (rank-one): S_new = S + e_j d^T, d = hnew[P] - H_j[P]
     rep = np.flatnonzero(~new)
-    if rep.size:
+    if rep.size == new.size:
+        rep = slice(None)  # every LP: views instead of gathered copies
+    if not isinstance(rep, np.ndarray) or rep.size:
         ku = st.ku
         jj = j[rep]
-        m = np.arange(rep.size)
+        m = np.arange(jj.size)
+        ixr = m if isinstance(rep, slice) else rep  # pairs with jj in fancy indexing
         sub_k, sub_pos = st.k[rep], st.pos[rep, :ku]
         d = np.take_along_axis(hnew[rep], sub_pos, axis=1) - np.take_along_axis(
-            st.H[rep, jj], sub_pos, axis=1)
+            st.H[ixr, jj], sub_pos, axis=1)
         d[np.arange(ku)[None, :] >= sub_k[:, None]] = 0.0
         Si = st.Sinv[rep, :ku, :ku]
         col = Si[m, :, jj]  # S^-1 e_j
         row = np.matmul(d[:, None, :], Si)[:, 0, :]  # d^T S^-1
         den = 1.0 + row[m, jj]
         st.Sinv[rep, :ku, :ku] = Si - col[:, :, None] * (row / den[:, None])[:, None, :]
-        st.H[rep, jj] = hnew[rep]
+        st.H[ixr, jj] = hnew[rep]
     # --- border: S_new = [[S, bcol], [c^T, dd]], bcol = H[:k, r], c = hnew[P], dd = 1 + hnew_r
     add = np.flatnonzero(new)
-    if add.size:
+    if add.size == new.size:
+        add = slice(None)
+    if not isinstance(add, np.ndarray) or add.size:
         kk = st.k[add]
         ku = int(kk.max()) + 1
-        m = np.arange(add.size)
+        m = np.arange(kk.size)
+        ixa = m if isinstance(add, slice) else add
         ra = r[add]
-        bcol = st.H[add, :ku, ra]  # rows beyond k are zero
+        bcol = st.H[ixa, :ku, ra]  # rows beyond k are zero
         cvec = np.take_along_axis(hnew[add], st.pos[add, :ku], axis=1)
         cvec[np.arange(ku)[None, :] >= kk[:, None]] = 0.0
-        dd = w[add, ra]  # S_kk = 1 + hnew_r = w_r
+        dd = w[ixa, ra]  # S_kk = 1 + hnew_r = w_r
         Si = st.Sinv[add, :ku, :ku]
         Sb = np.matmul(Si, bcol[:, :, None])[:, :, 0]
         cS = np.matmul(cvec[:, None, :], Si)[:, 0, :]
@@ -377,7 +383,7 @@ def _update_capacitance(st, idx, r, w):
         Snew[m, kk, :] = -cS / sigma[:, None]
         Snew[m, kk, kk] = 1.0 / sigma
         st.Sinv[add, :ku, :ku] = Snew
-        st.H[add, kk] = hnew[add]
-        st.pos[add, kk] = ra
-        st.where[add, ra] = kk
+        st.H[ixa, kk] = hnew[add]
+        st.pos[ixa, kk] = ra
+        st.where[ixa, ra] = kk
         st.k[add] += 1
