@@ -361,3 +361,13 @@ def test_people_read_nodes_from_1():
     assert b.constraints.labels() == ["I_1", "I_2", "I_3", "II_1", "II_2", "II_3"]
     assert list(b.table()["node"]) == [1, 2, 3, 1, 2, 3]
     assert b.to_dict()["adjacency_node"] == b.adjacency_node + 1
+
+
+def test_bit_identical_across_runs():
+    system, load = random_problem(30, 4)
+    a = shakedown_bounds(system, load, adjacency=True)
+    b = shakedown_bounds(system, load, adjacency=True)
+    for name in ("lam_low", "lam_high", "state_at_lam2", "certificate", "safe_state"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    assert (a.lam1, a.lam2, a.lam_adj, a.lam_separation) == (b.lam1, b.lam2, b.lam_adj,
+                                                             b.lam_separation)
