@@ -371,3 +371,18 @@ def test_bit_identical_across_runs():
         np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
     assert (a.lam1, a.lam2, a.lam_adj, a.lam_separation) == (b.lam1, b.lam2, b.lam_adj,
                                                              b.lam_separation)
+
+
+@pytest.mark.parametrize("n,seed", [(4, 1), (9, 2), (25, 3)])
+def test_auto_agrees_with_highs_on_degenerate_systems(n, seed):
+    """Uncoupled systems: the lam2 optimum is degenerate (one node's two parallel constraints
+    meet, far fewer than N + 1 strongly active rows) and many interval LPs tie.  The fast path
+    (with its shared answers) equals the reference path; 1e-6 = HiGHS's tolerance with margin."""
+    system, load = _uncoupled(n, seed)
+    a = shakedown_bounds(system, load, adjacency=True)
+    h = shakedown_bounds(system, load, adjacency=True, solver="highs")
+    assert a.status == h.status
+    for name in ("lam1", "lam2", "lam_adj", "lam_separation"):
+        assert getattr(a, name) == pytest.approx(getattr(h, name), rel=1e-6, nan_ok=True), name
+    np.testing.assert_allclose(a.lam_high, h.lam_high, rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(a.lam_low, h.lam_low, rtol=1e-6, atol=1e-9)

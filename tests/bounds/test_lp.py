@@ -262,3 +262,30 @@ def test_a_wrong_tableau_is_never_certified():
     for eq, a in zip(eqs, out, strict=True):
         if a.status == "optimal":
             assert e @ a.x == pytest.approx(highs_max(A, b, e, eq), rel=1e-7, abs=1e-9)
+
+
+def test_answers_are_shared_only_when_the_basis_proves_them():
+    """``dense_path._share``: an optimal basis of "row k tight" answers "row j tight" (j basic)
+    only if every other basic multiplier is >= 0; a vertex at lam = 0 answers every "min lam"
+    group of basic rows."""
+    from shakedown.bounds.dense_path import _share
+
+    groups = [(0,), (1,), (2,), (0, 2)]
+    by_row = {0: [0, 3], 1: [1], 2: [2, 3]}
+    basis = np.array([0, 1, 2])
+    y = np.array([0.5, -0.2, 0.3, 0.0])  # row 1 (the equality of group 1) has y < 0
+    ans = dense_lp.DenseAnswer("optimal", np.array([0.0, 0.7]), y, basis, 3, (0.0,) * 4)
+    out, done = np.full(4, np.nan), np.zeros(4, bool)
+    _share(ans, 1, groups, by_row, out, done, "max", lam_row=3)
+    # y_1 < 0 forbids sharing with the groups that make row 1 an inequality (only group 1 itself)
+    assert list(done) == [False, True, False, False]
+    y2 = np.array([0.5, 0.2, 0.3, 0.0])
+    ans2 = dense_lp.DenseAnswer("optimal", np.array([0.0, 0.7]), y2, basis, 3, (0.0,) * 4)
+    _share(ans2, 1, groups, by_row, out, done, "max", lam_row=3)
+    assert done.all() and np.all(out == 0.7)
+    # lam = 0 at a vertex with the row lam >= 0 basic: every basic group has lam_low = 0
+    ans3 = dense_lp.DenseAnswer("optimal", np.array([0.0, 0.0]), y, np.array([0, 2, 3]), 1,
+                                (0.0,) * 4)
+    out, done = np.full(4, np.nan), np.zeros(4, bool)
+    _share(ans3, 0, groups, by_row, out, done, "min", lam_row=3)
+    assert list(done) == [True, False, True, True] and np.all(out[done] == 0.0)
