@@ -90,7 +90,8 @@ def batch_dual_simplex(tab: Tableau, equal_rows, *, max_pivots=None, width=None,
     not solved, its entry is ``None``), so a caller can share answers between LPs.
 
     Returns a list of :class:`~.certificates.DenseAnswer` (multipliers in the caller's row
-    units), in the order of ``equal_rows``.
+    units), in the order of ``equal_rows``; with ``on_answer`` the answers are only streamed
+    (the list holds ``None``).
     """
     n, R = tab.n, tab.R
     if max_pivots is None:
@@ -237,10 +238,11 @@ def _batch(tab, eqs, max_pivots, width, on_answer, skip):  # noqa: C901  (one pi
             if lab == "optimal" and max(res[i]) > CERT_TOL:
                 lab = "failed"
             rr = tuple(float(v) for v in res[i]) if lab == "optimal" else (np.nan,) * 4
-            answers[g] = DenseAnswer(lab, X[i], Y[i] / tab.rownorm, bas[i].copy(),
-                                     int(piv[i]), rr)
-            if on_answer is not None:
-                on_answer(int(g), answers[g])
+            ans = DenseAnswer(lab, X[i], Y[i] / tab.rownorm, bas[i].copy(), int(piv[i]), rr)
+            if on_answer is None:
+                answers[g] = ans
+            else:  # streamed, not kept: memory stays linear in the pool width
+                on_answer(int(g), ans)
 
     while True:
         retire(st.piv >= max_pivots, "failed")
