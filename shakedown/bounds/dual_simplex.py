@@ -201,7 +201,11 @@ def _batch(tab, eqs, max_pivots, width, on_answer, skip):  # noqa: C901  (one pi
 
     def refill():
         nonlocal exhausted
-        want = width - st.ids.size
+        # fewer LPs in the pool once their basis updates have grown (capacity ``cap``):
+        # working storage stays below about CHUNK_BYTES
+        cap = st.H.shape[1]
+        per_lp = 8 * (cap * (n + cap) + 6 * tab.R)
+        want = min(width, max(1, CHUNK_BYTES // per_lp)) - st.ids.size
         new = []
         while len(new) < want and not exhausted:
             g = next(queue, None)
