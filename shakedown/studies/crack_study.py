@@ -74,7 +74,7 @@ def _realisation_task(spec: SweepSpec, r: int) -> dict:
     t0 = time.perf_counter()
     cracks, model, load = realisation_model(spec, r)
     t1 = time.perf_counter()
-    b = shakedown_bounds(model.system, load, separation=False)
+    b = shakedown_bounds(model.system, load, separation=False, adjacency=True)  # lam_adj: opt-in
     a = np.asarray(cracks.half_lengths, float)
     safe = np.asarray(b.state_at_lam2, float)
     return dict(realisation=r, n_cracks=int(a.size), abar=float(a.mean()),

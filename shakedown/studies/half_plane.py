@@ -229,7 +229,7 @@ def beta_study(betas, *, n_nodes=31, friction=0.5, P0=1e-3, P1=0.3e-3, Q1=0.3e-3
             worst.append(chk[1])
         cmp = compare_runs(runs)
         sub, sub_load, _ = contact_subsystem(m, m.load_cycle(P0=P0, Q1=bounds_Q1 or Q1), P0)
-        b = shakedown_bounds(sub, sub_load)
+        b = shakedown_bounds(sub, sub_load, adjacency=True)  # lam_adj is opt-in
         Ws = cmp["W"]
         rows.append({
             "beta": float(beta), "W_min": Ws.min(), "W_max": Ws.max(),

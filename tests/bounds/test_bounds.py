@@ -109,8 +109,8 @@ def test_against_cvxpy(seed):
 @pytest.mark.parametrize("n,seed", [(4, 0), (12, 1), (40, 2)])
 def test_auto_agrees_with_highs(n, seed):
     system, load = random_problem(n, seed)
-    a = shakedown_bounds(system, load)
-    h = shakedown_bounds(system, load, solver="highs")
+    a = shakedown_bounds(system, load, adjacency=True)
+    h = shakedown_bounds(system, load, solver="highs", adjacency=True)
     assert a.status == h.status == "bounded"
     for name in ("lam1", "lam2", "lam_adj", "lam_separation", "safe_margin"):
         assert getattr(a, name) == pytest.approx(getattr(h, name), rel=1e-6), name
@@ -136,8 +136,8 @@ def test_permutation_invariance():
     perm = np.random.default_rng(0).permutation(7)
     ix = np.ix_(perm, perm)
     s2 = sd.DiscreteSystem(system.A[ix], system.B[ix], system.C[ix], system.friction[perm])
-    b1 = shakedown_bounds(system, load)
-    b2 = shakedown_bounds(s2, load.permuted(perm))
+    b1 = shakedown_bounds(system, load, adjacency=True)
+    b2 = shakedown_bounds(s2, load.permuted(perm), adjacency=True)
     assert b2.lam1 == pytest.approx(b1.lam1, rel=1e-9)
     assert b2.lam2 == pytest.approx(b1.lam2, rel=1e-9)
     assert b2.lam_adj == pytest.approx(b1.lam_adj, rel=1e-9)
@@ -272,6 +272,18 @@ def test_ill_conditioned_K():
     check_certificate(a)
 
 
+def test_n600_certified():
+    """A fast stand-in for the N = 2000 run in the default suite: every LP certified, the lam2
+    certificate checked independently, and lam1 the upper end of its limiting interval."""
+    system, load = random_problem(600, 0)
+    b = shakedown_bounds(system, load, separation=False)
+    assert b.status == "bounded" and 0 < b.lam1 <= b.lam2
+    assert max(b.residuals.values()) <= 1e-7
+    check_certificate(b)
+    assert b.lam1 == b.lam_high[b.limiting_constraint]
+    assert np.all(b.lam_low == 0.0)
+
+
 @pytest.mark.slow
 def test_n2000_finishes():
     system, load = random_problem(2000, 0)
@@ -322,3 +334,55 @@ def test_no_separation_limit_at_a_frictionless_node(solver):
         assert safe.any()
         best.append(np.max(0.3 - lam + (V[safe] @ B)[:, 0]))  # best min_t p_0 over safe states
     assert best[0] > 0 > best[1]
+
+
+# ---------------------------------------------------------------------- options
+def test_only_and_not_computed_fields():
+    """``lam_adj`` is opt-in; a quantity not computed is ``nan`` (and says so in JSON), never a
+    value that could be read as an answer (``inf`` means "the facets never meet")."""
+    system, load = random_problem(5, 2)
+    full = shakedown_bounds(system, load, adjacency=True)
+    default = shakedown_bounds(system, load)
+    assert np.isnan(default.lam_adj) and default.adjacency_node == -1
+    assert default.to_dict()["lam_adj"] == "nan" and default.to_dict()["adjacency_node"] is None
+    assert (default.lam1, default.lam2) == (full.lam1, full.lam2)
+    two = shakedown_bounds(system, load, only=("lam1", "lam2"))
+    assert (two.lam1, two.lam2) == (full.lam1, full.lam2)
+    assert np.isnan(two.lam_adj) and np.isnan(two.lam_separation)
+    adj = shakedown_bounds(system, load, only=["lam_adj"])
+    assert adj.lam_adj == full.lam_adj and np.isnan(adj.lam1) and np.isnan(adj.lam_high).all()
+    with pytest.raises(sd.InputError, match="only: unknown quantity 'lam3'"):
+        shakedown_bounds(system, load, only=("lam1", "lam3"))
+
+
+def test_people_read_nodes_from_1():
+    system, load = random_problem(3, 0)
+    b = shakedown_bounds(system, load, adjacency=True)
+    assert b.constraints.labels() == ["I_1", "I_2", "I_3", "II_1", "II_2", "II_3"]
+    assert list(b.table()["node"]) == [1, 2, 3, 1, 2, 3]
+    assert b.to_dict()["adjacency_node"] == b.adjacency_node + 1
+
+
+def test_bit_identical_across_runs():
+    system, load = random_problem(30, 4)
+    a = shakedown_bounds(system, load, adjacency=True)
+    b = shakedown_bounds(system, load, adjacency=True)
+    for name in ("lam_low", "lam_high", "state_at_lam2", "certificate", "safe_state"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    assert (a.lam1, a.lam2, a.lam_adj, a.lam_separation) == (b.lam1, b.lam2, b.lam_adj,
+                                                             b.lam_separation)
+
+
+@pytest.mark.parametrize("n,seed", [(4, 1), (9, 2), (25, 3)])
+def test_auto_agrees_with_highs_on_degenerate_systems(n, seed):
+    """Uncoupled systems: the lam2 optimum is degenerate (one node's two parallel constraints
+    meet, far fewer than N + 1 strongly active rows) and many interval LPs tie.  The fast path
+    (with its shared answers) equals the reference path; 1e-6 = HiGHS's tolerance with margin."""
+    system, load = _uncoupled(n, seed)
+    a = shakedown_bounds(system, load, adjacency=True)
+    h = shakedown_bounds(system, load, adjacency=True, solver="highs")
+    assert a.status == h.status
+    for name in ("lam1", "lam2", "lam_adj", "lam_separation"):
+        assert getattr(a, name) == pytest.approx(getattr(h, name), rel=1e-6, nan_ok=True), name
+    np.testing.assert_allclose(a.lam_high, h.lam_high, rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(a.lam_low, h.lam_low, rtol=1e-6, atol=1e-9)

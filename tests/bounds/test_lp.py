@@ -101,3 +101,192 @@ def test_degenerate_optimum_is_completed_not_abandoned(n):
     assert ans.x[-1] == pytest.approx(highs_max(A, b, e), rel=1e-7)
     # certificate: y >= 0 and A^T y = e (the interior point's accuracy, 1e-8 relative)
     assert np.all(ans.y >= 0) and np.allclose(A.T @ ans.y, e, atol=1e-7)
+
+
+# ---------------------------------------------------------------------- issue 13/14 regressions
+def _default_scene_lp():
+    """The lam2 LP of the default scene's first realisation (100 Kachanov cracks, seed 2024,
+    ``SeedSequence(2024, spawn_key=(0, 0))`` as the sweep draws it): the LP on which the interior
+    point stalled (dual residual 2e-5 after 400 iterations, every LP then sent to HiGHS)."""
+    import crack_networks as cn
+    import shakedown as sd
+
+    ss = np.random.SeedSequence(2024, spawn_key=(0, 0))
+    cracks = cn.sample_crack_set(100, rng=np.random.default_rng(ss), density=0.1,
+                                 half_length=1.0, min_spacing=0.1)
+    model = cn.kachanov_model(cracks, shear_modulus=1.0, poisson_ratio=0.25, friction=0.6)
+    return model.system, model.load_cycle(static=(-1, 0, -1), cyclic=(0, 1, 0)), sd
+
+
+def test_interior_point_does_not_stall_on_the_default_scene(monkeypatch):
+    """Its optimum is a non-degenerate vertex with one multiplier 2.2e-7 against 0.52: the normal
+    matrix reaches condition 1e14 and the dual residual cannot go below ~1e-7 (ipm.py docstring).
+    The interior point must hand a usable iterate to the crossover, and no LP may need HiGHS."""
+    from shakedown.bounds import highs_path
+    from shakedown.bounds.constraints import Scales
+    from shakedown.bounds.ipm import ipm
+
+    system, load, sd = _default_scene_lp()
+    cs = sd.bounds.extreme_constraints(system, load)
+    ch = Scales.of(cs).nondimensional(cs)
+    n = cs.n_nodes
+    A = np.vstack([np.hstack([ch.G, -ch.m[:, None]]), np.r_[np.zeros(n), -1.0][None, :]])
+    b = np.r_[ch.c, 0.0]
+    rn = np.linalg.norm(A, axis=1)
+    x, s, z, status, it = ipm(A / rn[:, None], b / rn, np.r_[np.zeros(n), 1.0])
+    assert status in ("converged", "approximate") and it <= 40
+    calls = []
+    real = highs_path.HighsModel.run
+    monkeypatch.setattr(highs_path.HighsModel, "run",
+                        lambda self, *a, **k: calls.append(a) or real(self, *a, **k))
+    auto = sd.shakedown_bounds(system, load, separation=False)
+    assert calls == []
+    ref = sd.shakedown_bounds(system, load, separation=False, solver="highs")
+    # both certified vertices: measured agreement 7e-14 (lam1) and 7e-15 (lam2)
+    assert auto.lam1 == pytest.approx(ref.lam1, rel=1e-9)
+    assert auto.lam2 == pytest.approx(ref.lam2, rel=1e-9)
+
+
+def _kachanov_tableau(n_cracks=60, seed=5):
+    """The lam2 tableau of a Kachanov network: its interval / adjacency LPs need tens of pivots
+    each (more than the initial capacity 16 of the basis update and than REINVERT_EVERY)."""
+    import crack_networks as cn
+    from shakedown.bounds import extreme_constraints
+    from shakedown.bounds.constraints import Scales
+
+    cracks = cn.sample_crack_set(n_cracks, density=0.15, rng=seed)
+    m = cn.kachanov_model(cracks, friction=0.6)
+    cs = extreme_constraints(m.system, m.load_cycle((-1, 0, -1), (0, 1, 0)))
+    cs = Scales.of(cs).nondimensional(cs)
+    n = cs.n_nodes
+    A = np.vstack([np.hstack([cs.G, -cs.m[:, None]]), np.r_[np.zeros(n), -1.0][None, :]])
+    b = np.r_[cs.c, 0.0]
+    e = np.r_[np.zeros(n), 1.0]
+    ans, tab = dense_lp.solve_max(A, b, e)
+    return A, b, e, ans, tab
+
+
+def test_basis_update_over_many_pivots_matches_highs():
+    """Woodbury update with bordering, rank-one replacement, capacity growth and periodic
+    reinversion: every answer certified and equal to HiGHS (1e-7: HiGHS's tolerance)."""
+    from shakedown.bounds.dual_simplex import REINVERT_EVERY
+
+    A, b, e, ans, tab = _kachanov_tableau()
+    n = A.shape[1] - 1
+    # "min lam" from a vertex of H(0): the adjacency LPs walk far (many pivots)
+    T1 = tab.T0.copy()
+    T1[int(np.argmax(np.abs(tab.W[:, 2 * n])))] = 2 * n
+    start = dense_lp.batch_dual_simplex(dense_lp.Tableau(A, b, -e, T1), [()])[0]
+    tab0 = dense_lp.Tableau(A, b, -e, start.basis)
+    eqs = [(j, n + j) for j in range(0, n, 3)] + [(k,) for k in range(0, 2 * n, 7)]
+    out = dense_lp.batch_dual_simplex(tab0, eqs, width=5)
+    assert max(a.iterations for a in out) > 2 * max(16, REINVERT_EVERY)
+    for eq, a in zip(eqs, out, strict=True):
+        ref = highs_max(A, b, -e, eq)
+        if np.isnan(ref):  # the row is never tight (never active)
+            assert a.status == "infeasible"
+            continue
+        assert a.status == "optimal"
+        assert -e @ a.x == pytest.approx(ref, rel=1e-7, abs=1e-9)
+        assert max(dense_lp.kkt_residuals(A, b, -e, a.x, a.y, equal=eq)) <= 1e-9
+
+
+def test_answers_are_reproducible_and_independent_of_the_pool_width():
+    """Bit-identical answers run to run; the same answers whatever the number of LPs pivoting
+    together (same pivots; x to rounding: the batched products may sum in another order, 1e-13
+    measured)."""
+    A, b, e, ans, tab = _kachanov_tableau(40, 2)
+    eqs = [(k,) for k in range(A.shape[0] - 1)]
+    many = dense_lp.batch_dual_simplex(tab, eqs, width=64)
+    again = dense_lp.batch_dual_simplex(tab, eqs, width=64)
+    one = dense_lp.batch_dual_simplex(tab, eqs, width=1)
+    for a, c, d in zip(one, many, again, strict=True):
+        np.testing.assert_array_equal(c.x, d.x)
+        np.testing.assert_array_equal(c.basis, d.basis)
+        assert a.status == c.status and a.iterations == c.iterations
+        np.testing.assert_array_equal(a.basis, c.basis)
+        np.testing.assert_allclose(a.x, c.x, rtol=1e-11, atol=1e-12)
+
+
+def test_degenerate_lps_match_highs():
+    """Duplicated rows, rows through the same vertex and parallel rows (ties in the ratio test
+    and in pricing)."""
+    rng = np.random.default_rng(3)
+    A0, b0, e = random_lp(5, 12, 1)
+    x0 = rng.standard_normal(5) * 0.1
+    through = rng.standard_normal((6, 5))
+    A = np.vstack([A0, A0[:4], through, 2.0 * A0[4:6]])
+    b = np.r_[b0, b0[:4], through @ x0 + 0.0, 2.0 * b0[4:6]]
+    b[len(b0) + 4 : len(b0) + 10] = through @ x0 + np.abs(through @ x0).max()  # all tied
+    ans, tab = dense_lp.solve_max(A, b, e)
+    assert ans is not None and e @ ans.x == pytest.approx(highs_max(A, b, e), rel=1e-7)
+    eqs = [(k,) for k in range(len(b))] + [(0, len(b0)), (1, 2, 3)]
+    for eq, a in zip(eqs, dense_lp.batch_dual_simplex(tab, eqs), strict=True):
+        ref = highs_max(A, b, e, eq)
+        if np.isnan(ref):
+            assert a.status in ("infeasible", "failed")
+            continue
+        if a.status == "failed":
+            continue  # not certified: the engine hands it to HiGHS
+        assert a.status == "optimal"
+        assert e @ a.x == pytest.approx(ref, rel=1e-7, abs=1e-9)
+
+
+# ---------------------------------------------------------------------- certificates object
+def test_kkt_residuals_object_to_wrong_answers():
+    A, b, e = random_lp(6, 15, 4)
+    ans, _ = dense_lp.solve_max(A, b, e)
+    x, y = ans.x, ans.y
+    assert max(dense_lp.kkt_residuals(A, b, e, x, y)) <= 1e-12
+    top = int(np.argmax(y))
+    worse = [
+        (x + 1e-3 * (A[top] / np.linalg.norm(A[top])), y, 0),  # infeasible point
+        (x, np.where(np.arange(len(y)) == top, -y, y), 1),  # a negative multiplier
+        (x, 1.001 * y, 2),  # A^T y != e
+        (x - 1e-3 * A[top] / np.linalg.norm(A[top]), y, 3),  # y_top > 0 on a slack row
+    ]
+    for xx, yy, which in worse:
+        res = dense_lp.kkt_residuals(A, b, e, xx, yy)
+        assert res[which] > 1e3 * dense_lp.CERT_TOL, which
+
+
+def test_a_wrong_tableau_is_never_certified():
+    """A corrupted tableau W makes the dual simplex pivot wrongly; its answers must either be
+    right (and certified) or come back "failed" (then the engine asks HiGHS)."""
+    A, b, e = random_lp(8, 20, 6)
+    ans, tab = dense_lp.solve_max(A, b, e)
+    tab.W = tab.W + 1e-2 * np.random.default_rng(0).standard_normal(tab.W.shape)
+    eqs = [(k,) for k in range(len(b))]
+    out = dense_lp.batch_dual_simplex(tab, eqs)
+    statuses = {a.status for a in out}
+    assert "failed" in statuses
+    for eq, a in zip(eqs, out, strict=True):
+        if a.status == "optimal":
+            assert e @ a.x == pytest.approx(highs_max(A, b, e, eq), rel=1e-7, abs=1e-9)
+
+
+def test_answers_are_shared_only_when_the_basis_proves_them():
+    """``dense_path._share``: an optimal basis of "row k tight" answers "row j tight" (j basic)
+    only if every other basic multiplier is >= 0; a vertex at lam = 0 answers every "min lam"
+    group of basic rows."""
+    from shakedown.bounds.dense_path import _share
+
+    groups = [(0,), (1,), (2,), (0, 2)]
+    by_row = {0: [0, 3], 1: [1], 2: [2, 3]}
+    basis = np.array([0, 1, 2])
+    y = np.array([0.5, -0.2, 0.3, 0.0])  # row 1 (the equality of group 1) has y < 0
+    ans = dense_lp.DenseAnswer("optimal", np.array([0.0, 0.7]), y, basis, 3, (0.0,) * 4)
+    out, done = np.full(4, np.nan), np.zeros(4, bool)
+    _share(ans, 1, groups, by_row, out, done, "max", lam_row=3)
+    # y_1 < 0 forbids sharing with the groups that make row 1 an inequality (only group 1 itself)
+    assert list(done) == [False, True, False, False]
+    y2 = np.array([0.5, 0.2, 0.3, 0.0])
+    ans2 = dense_lp.DenseAnswer("optimal", np.array([0.0, 0.7]), y2, basis, 3, (0.0,) * 4)
+    _share(ans2, 1, groups, by_row, out, done, "max", lam_row=3)
+    assert done.all() and np.all(out == 0.7)
+    # lam = 0 at a vertex with the row lam >= 0 basic: every basic group has lam_low = 0
+    ans3 = dense_lp.DenseAnswer("optimal", np.array([0.0, 0.0]), y, np.array([0, 2, 3]), 1,
+                                (0.0,) * 4)
+    out, done = np.full(4, np.nan), np.zeros(4, bool)
+    _share(ans3, 0, groups, by_row, out, done, "min", lam_row=3)
+    assert list(done) == [True, False, True, True] and np.all(out[done] == 0.0)

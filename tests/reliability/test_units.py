@@ -34,9 +34,6 @@ from shakedown import stability as stab
 #: log10 of a unit-change factor, 1e-6 .. 1e12 (issue 10 item 1)
 EXPONENT = st.floats(min_value=-6.0, max_value=12.0, allow_nan=False)
 
-PENDING_BOUNDS = pytest.mark.xfail(
-    reason="scale-free bounds/step solver pending on its branch", strict=False)
-
 FAST = settings(max_examples=15, deadline=None,
                 suppress_health_check=[HealthCheck.too_slow])
 SLOW = settings(max_examples=6, deadline=None,
@@ -69,11 +66,10 @@ def four_node():
 
 
 SYSTEMS = {"two_node": two_node(), "four_node": four_node()}
-REF_BOUNDS = {k: sd.shakedown_bounds(*v) for k, v in SYSTEMS.items()}
+REF_BOUNDS = {k: sd.shakedown_bounds(*v, adjacency=True) for k, v in SYSTEMS.items()}
 
 
 # ------------------------------------------------------------------ lam1, lam2, lam_adj
-@PENDING_BOUNDS
 @pytest.mark.parametrize("name", sorted(SYSTEMS))
 @FAST
 @given(ek=EXPONENT, ef=EXPONENT)
@@ -82,7 +78,7 @@ REF_BOUNDS = {k: sd.shakedown_bounds(*v) for k, v in SYSTEMS.items()}
 @example(ek=36 * np.log10(2), ef=27 * np.log10(2))  # the issue's exact powers of two
 def test_bounds_do_not_depend_on_units(name, ek, ef):
     ref = REF_BOUNDS[name]
-    b = sd.shakedown_bounds(*rescaled(*SYSTEMS[name], 10.0**ek, 10.0**ef))
+    b = sd.shakedown_bounds(*rescaled(*SYSTEMS[name], 10.0**ek, 10.0**ef), adjacency=True)
     assert b.status == ref.status
     # LP answers are certified to 1e-9 relative (HiGHS feasibility/optimality tolerances on
     # the nondimensional problem); the two problems differ only by rounding of the data
@@ -270,10 +266,10 @@ def test_fe_model_in_si_units_scales_exactly(fe_pair):
                                                                rel=1e-7, abs=1e-12)
 
 
-@PENDING_BOUNDS
 def test_fe_bounds_in_si_units(fe_pair):
     (cm1, load1), (cm2, load2) = fe_pair
-    b1, b2 = sd.shakedown_bounds(cm1.system, load1), sd.shakedown_bounds(cm2.system, load2)
+    b1 = sd.shakedown_bounds(cm1.system, load1, adjacency=True)
+    b2 = sd.shakedown_bounds(cm2.system, load2, adjacency=True)
     for key in ("lam1", "lam2", "lam_adj"):
         assert getattr(b2, key) == pytest.approx(getattr(b1, key), rel=1e-7), key
 
@@ -314,10 +310,11 @@ def test_kachanov_model_in_si_units_scales_exactly(cracks, mu, p0, length):
         m1.normalised_dissipation(run1.steady_dissipation, 1.0), rel=1e-7)
 
 
-@PENDING_BOUNDS
 @pytest.mark.parametrize("mu, p0, length", SI[1:])
 def test_kachanov_bounds_in_si_units(cracks, mu, p0, length):
-    b1 = sd.shakedown_bounds(*(lambda m, lc: (m.system, lc))(*_kachanov(cracks, *SI[0])))
-    b2 = sd.shakedown_bounds(*(lambda m, lc: (m.system, lc))(*_kachanov(cracks, mu, p0, length)))
+    b1 = sd.shakedown_bounds(*(lambda m, lc: (m.system, lc))(*_kachanov(cracks, *SI[0])),
+                         adjacency=True)
+    b2 = sd.shakedown_bounds(*(lambda m, lc: (m.system, lc))(*_kachanov(cracks, mu, p0, length)),
+                         adjacency=True)
     for key in ("lam1", "lam2", "lam_adj"):
         assert getattr(b2, key) == pytest.approx(getattr(b1, key), rel=1e-7), key

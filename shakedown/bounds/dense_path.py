@@ -1,0 +1,178 @@
+"""The fast LP path (``solver="auto"``): dense interior point + lock-step dual simplex.
+
+LP ``max e.x, A x <= b`` in ``x = (v, lam)``: rows ``[G, -m] <= c`` and ``-lam <= 0``, on a
+nondimensional constraint set.  The ``lam2`` LP is solved by :func:`~.dense_lp.solve_max`; the
+activity-interval LPs (``max`` / ``min lam`` with row ``k`` tight) and the adjacency LPs
+(``min lam`` with ``I_j`` and ``II_j`` tight) by the batched dual simplex, warm-started from the
+``lam2`` basis (``max``) or from a vertex of ``H(0)`` (``min``).
+
+Answers are shared between LPs when one optimal basis solves several of them (all exact, with
+the same certificate): a basis optimal for "row ``k`` tight" with multipliers ``y >= 0`` on every
+basic row except ``k`` is optimal for "row ``j`` tight" for every basic row ``j`` when also
+``y_k >= 0``; and a vertex with ``lam = 0`` proves ``lam_low = 0`` for every basic row (``lam >= 0``
+is a constraint).  Any answer that is not certified is re-solved by HiGHS.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import dense_lp
+from .certificates import CERT_TOL
+from .constraints import ConstraintSet
+from .highs_path import RESIDUAL_NAMES, HighsModel
+from .outcome import PathOutcome, lam1_from_intervals, separation_outcome, value
+
+
+class _Book:
+    """Counts LPs and iterations, keeps the worst residuals, builds HiGHS only if needed."""
+
+    def __init__(self, cs):
+        self.cs = cs
+        self.worst = dict.fromkeys(RESIDUAL_NAMES, 0.0)
+        self.lps = 0
+        self.iters = 0
+        self._highs = None
+
+    def record(self, ans):
+        self.lps += 1
+        self.iters += ans.iterations
+        if ans.status == "optimal":
+            for k, r in zip(RESIDUAL_NAMES, ans.residuals, strict=True):
+                self.worst[k] = max(self.worst[k], r)
+
+    def highs(self, sense, tight=(), separation=False):
+        if self._highs is None:
+            self._highs = HighsModel(self.cs)
+        ans = self._highs.run(sense, tight=tight, separation=separation)
+        self.lps += 1
+        self.iters += ans.iterations
+        for k in RESIDUAL_NAMES:
+            self.worst[k] = max(self.worst[k], self._highs.worst[k])
+        return ans
+
+
+def _family(tab, groups, sense, book, lam_row):
+    """Values of ``max`` (``sense="max"``) or ``min lam`` with the rows of each group tight.
+
+    ``tab`` is a dual-feasible start for the objective (``+lam`` or ``-lam``).  Groups are
+    started in order; an optimal basis that also solves groups not yet started (module
+    docstring) answers them without a solve.  ``nan`` = infeasible (never active).
+    """
+    out = np.full(len(groups), np.nan)
+    done = np.zeros(len(groups), bool)
+    by_row = {}
+    for g, rows in enumerate(groups):
+        for r in rows:
+            by_row.setdefault(r, []).append(g)
+    failed = []
+
+    def on_answer(g, ans):
+        book.record(ans)
+        done[g] = True
+        if ans.status == "optimal":
+            out[g] = ans.x[-1]
+            _share(ans, g, groups, by_row, out, done, sense, lam_row)
+        elif ans.status == "infeasible":
+            out[g] = np.nan
+        else:
+            failed.append(g)
+
+    dense_lp.batch_dual_simplex(tab, groups, on_answer=on_answer, skip=lambda g: done[g])
+    for g in failed:  # not certified: the reference solver decides
+        out[g] = value(book.highs(sense, groups[g]))
+    return out
+
+
+def _share(ans, g, groups, by_row, out, done, sense, lam_row):
+    """Give the answer of group ``g`` to every not yet solved group it provably solves."""
+    T = ans.basis
+    yT = ans.y[T]
+    tol = CERT_TOL * max(float(np.abs(yT).max(initial=0.0)), np.finfo(float).tiny)
+    neg = set(T[yT < -tol].tolist())
+    basic = set(T.tolist())
+    at_zero = sense == "min" and lam_row in basic  # the vertex has lam = 0 exactly
+    for r in T:
+        for h in by_row.get(int(r), ()):
+            if done[h]:
+                continue
+            rows = set(groups[h])
+            if rows <= basic and (at_zero or neg <= rows):
+                out[h] = 0.0 if at_zero else ans.x[-1]
+                done[h] = True
+
+
+def solve_dense(cs: ConstraintSet, intervals: bool, adjacency: bool,
+                separation: bool) -> PathOutcome | None:
+    """Dense path; ``None`` when the ``lam2`` LP is not a certified optimum (unbounded,
+    infeasible or numerical trouble): the caller then uses :func:`~.highs_path.solve_highs`."""
+    n = cs.n_nodes
+    A = np.vstack([np.hstack([cs.G, -cs.m[:, None]]), np.r_[np.zeros(n), -1.0][None, :]])
+    b = np.r_[cs.c, 0.0]
+    e = np.r_[np.zeros(n), 1.0]
+    main, tab = dense_lp.solve_max(A, b, e)
+    if main is None:
+        return None
+    book = _Book(cs)
+    book.record(main)
+    lam2 = float(main.x[-1])
+    out = PathOutcome(lam1=np.nan, lam2=lam2, status="bounded", messages=[],
+                      lam_low=np.full(2 * n, np.nan), lam_high=np.full(2 * n, np.nan),
+                      v_at_lam2=main.x[:n].copy(), certificate=main.y[: 2 * n].copy())
+    lamrow = 2 * n
+    tab0 = _min_start(A, b, e, tab, lamrow, book) if (intervals or adjacency) else None
+    if intervals:
+        hi = out.lam_high
+        hi[main.basis[main.basis < lamrow]] = lam2  # tight at the lam2 optimum
+        rest = [k for k in range(2 * n) if np.isnan(hi[k])]
+        hi[rest] = _family(tab, [(k,) for k in rest], "max", book, lamrow)
+        fin = np.isfinite(hi)
+        hi[fin] = np.minimum(hi[fin], lam2)
+        act = [k for k in range(2 * n) if np.isfinite(hi[k])]
+        if tab0 is not None:
+            lo = _family(tab0, [(k,) for k in act], "min", book, lamrow)
+        else:
+            lo = np.array([value(book.highs("min", (k,))) for k in act])
+        out.lam_low[act] = np.where(np.isnan(lo), lo, np.maximum(lo, 0.0))  # -0.0 -> 0.0
+        out.lam1, out.limiting = lam1_from_intervals(cs.labels(), out.lam_low, out.lam_high,
+                                                     lam2, out.messages)
+    if adjacency:
+        pairs = [(j, n + j) for j in range(n)]
+        if tab0 is not None:
+            adj = _family(tab0, pairs, "min", book, lamrow)
+        else:
+            adj = np.array([value(book.highs("min", t)) for t in pairs])
+        adj = np.where(np.isnan(adj), np.inf, np.maximum(adj, 0.0))
+        out.lam_adj = np.inf
+        if np.isfinite(adj).any():
+            out.adj_node = int(np.argmin(adj))
+            out.lam_adj = float(adj[out.adj_node])
+    if separation:
+        v2 = out.v_at_lam2
+        sep = cs.sep_G @ v2 - cs.sep_c - lam2 * cs.sep_m
+        scale = np.abs(cs.sep_G).max(initial=0.0) * np.abs(v2).max(initial=0.0) + np.abs(cs.sep_c)
+        if np.all(sep <= 1e-9 * np.maximum(scale, 1e-300)):
+            out.lam_sep = lam2  # the lam2 optimum already keeps every node in compression
+        else:
+            out.lam_sep, out.sep_nodes = separation_outcome(
+                book.highs("max", separation=True), lam2, n)
+    out.residuals, out.n_lps, out.iterations = book.worst, book.lps, book.iters
+    return out
+
+
+def _min_start(A, b, e, tab, lamrow, book):
+    """A dual-feasible basis for ``min lam``: the ``lam2`` basis with the row ``lam >= 0``
+    swapped in, cleaned up by one dual simplex solve; ``None`` if that fails."""
+    T1 = tab.T0.copy()
+    if lamrow not in T1:
+        T1[int(np.argmax(np.abs(tab.W[:, lamrow])))] = lamrow
+    tab0 = dense_lp.Tableau(A, b, -e, T1)
+    if tab0.singular:
+        return None
+    start = dense_lp.batch_dual_simplex(tab0, [()])[0]
+    book.record(start)
+    if start.status != "optimal":
+        return None
+    if start.iterations:
+        tab0 = dense_lp.Tableau(A, b, -e, start.basis)
+    return None if tab0.singular else tab0

@@ -1,0 +1,132 @@
+"""The reference LP path: every LP of the bounds engine by HiGHS (one model, warm starts).
+
+All LPs are ``max/min lam`` subject to ``G v - m lam <= c`` (optionally some rows tight, and the
+no-separation rows), on a nondimensional constraint set (:class:`~.constraints.Scales`), so
+HiGHS's absolute tolerances (1e-7) are relative to the problem's own scales.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .constraints import ConstraintSet
+from .lp import LPAnswer, ReusableLP
+from .outcome import PathOutcome, lam1_from_intervals, separation_outcome, value
+
+RESIDUAL_NAMES = ("primal", "dual", "stationarity", "complementarity")
+
+
+class HighsModel:
+    """The LP model ``max/min lam`` s.t. ``G v - m lam <= c`` (+ optional separation rows)."""
+
+    def __init__(self, cs: ConstraintSet):
+        n = cs.n_nodes
+        self.n = n
+        rows = np.vstack(
+            [np.hstack([cs.G, -cs.m[:, None]]), np.hstack([cs.sep_G, -cs.sep_m[:, None]])]
+        )
+        self.c = cs.c
+        self.sep_c = cs.sep_c
+        row_lo = np.full(3 * n, -np.inf)
+        row_hi = np.concatenate([cs.c, np.full(n, np.inf)])  # separation rows off
+        col_lo = np.concatenate([np.full(n, -np.inf), [0.0]])
+        col_hi = np.full(n + 1, np.inf)
+        cost = np.zeros(n + 1)
+        cost[n] = 1.0
+        self.lp = ReusableLP(rows, row_lo, row_hi, col_lo, col_hi, cost)
+        self.worst = dict.fromkeys(RESIDUAL_NAMES, 0.0)
+
+    def run(self, sense: str, tight=(), separation: bool = False) -> LPAnswer:
+        lp = self.lp
+        cost = np.zeros(self.n + 1)
+        cost[self.n] = 1.0
+        lp.set_objective(cost, sense)
+        for k in tight:
+            lp.set_row_bounds(k, self.c[k], self.c[k])
+        if separation:
+            for j in range(self.n):
+                lp.set_row_bounds(2 * self.n + j, -np.inf, self.sep_c[j])
+        ans = lp.solve()
+        for k in tight:
+            lp.set_row_bounds(k, -np.inf, self.c[k])
+        if separation:
+            for j in range(self.n):
+                lp.set_row_bounds(2 * self.n + j, -np.inf, np.inf)
+        if ans.status == "optimal":
+            for key, val in zip(
+                RESIDUAL_NAMES,
+                (ans.primal_residual, ans.dual_residual, ans.stationarity_residual,
+                 ans.complementarity_residual),
+                strict=True,
+            ):
+                self.worst[key] = max(self.worst[key], val)
+        return ans
+
+
+def solve_highs(cs: ConstraintSet, has_periodic_part: bool, intervals: bool, adjacency: bool,
+                separation: bool) -> PathOutcome:
+    """Every LP by HiGHS (the reference path); ``cs`` nondimensional."""
+    n = cs.n_nodes
+    eng = HighsModel(cs)
+    scale_m = np.abs(cs.m).max(initial=0.0)
+    messages = []
+
+    main = eng.run("max")
+    lam2 = value(main)
+    status = "bounded"
+    v_at_lam2 = main.x[:n].copy() if main.status == "optimal" else np.zeros(0)
+    certificate = main.row_dual[: 2 * n].copy() if main.status == "optimal" else np.zeros(0)
+    if main.status.startswith("unbounded"):
+        # distinguish "unbounded" from "infeasible" (HiGHS may report either way)
+        feas = eng.run("min")
+        lam2 = np.nan if feas.status == "infeasible" else np.inf
+    if np.isnan(lam2):
+        status = "infeasible"
+        messages.append(
+            "no safe slip state for any lam >= 0: the static load alone violates friction "
+            "(gross slip) or the constraints are inconsistent"
+        )
+    elif np.isinf(lam2):
+        if not has_periodic_part or scale_m == 0.0:
+            status = "unbounded_no_periodic_part"
+            messages.append("the load has no periodic part: a safe state exists for every lam")
+        elif np.all(cs.m >= 0):
+            status = "unbounded_periodic_never_excludes"
+            messages.append("the periodic part never tightens a constraint (m >= 0)")
+        else:
+            status = "unbounded"
+            messages.append("a safe state exists for every lam (the safe region moves with lam)")
+    out = PathOutcome(lam1=np.nan, lam2=lam2, status=status, messages=messages,
+                      lam_low=np.full(2 * n, np.nan), lam_high=np.full(2 * n, np.nan),
+                      v_at_lam2=v_at_lam2, certificate=certificate)
+    if intervals and status != "infeasible":
+        if main.status == "optimal":
+            # constraints tight at the lam2 optimum are active up to lam2 (can't go higher)
+            slack = cs.c + lam2 * cs.m - cs.G @ v_at_lam2
+            rs = np.abs(cs.G).max(axis=1) * np.abs(v_at_lam2).max(initial=0.0) + np.abs(cs.c)
+            tight_at_end = slack <= 1e-9 * rs
+        else:
+            tight_at_end = np.zeros(2 * n, bool)
+        for k in range(2 * n):
+            if tight_at_end[k]:
+                out.lam_high[k] = lam2
+            else:
+                out.lam_high[k] = value(eng.run("max", tight=(k,)))
+        for k in range(2 * n):
+            if np.isnan(out.lam_high[k]):
+                continue  # never active
+            out.lam_low[k] = value(eng.run("min", tight=(k,)))
+        out.lam1, out.limiting = lam1_from_intervals(cs.labels(), out.lam_low, out.lam_high, lam2,
+                                                     messages)
+    if adjacency and status != "infeasible":
+        out.lam_adj = np.inf
+        for j in range(n):
+            a = value(eng.run("min", tight=(j, n + j)))
+            if np.isfinite(a) and a < out.lam_adj:
+                out.lam_adj, out.adj_node = a, j
+    if separation and status != "infeasible":
+        out.lam_sep, out.sep_nodes = separation_outcome(eng.run("max", separation=True), lam2, n)
+    out.residuals = dict(eng.worst)
+    out.n_lps = eng.lp.n_solves
+    out.iterations = eng.lp.total_iterations
+    return out

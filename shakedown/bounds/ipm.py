@@ -1,0 +1,211 @@
+"""Dense interior point for ``max e.x  s.t.  A x <= b`` and the basis identification after it.
+
+:func:`ipm` is a Mehrotra predictor-corrector method on the normal equations ``A^T D A``
+(``D = Z S^-1``; one ``dsyrk`` + Cholesky per iteration, ``O(R n^2)``).  It only has to bring the
+iterate close enough to the optimal face for :func:`identify_basis` / :func:`complete_basis` to
+name an optimal basis; the dual simplex then finishes and certifies the answer
+(:mod:`.dual_simplex`).
+
+Why the stopping test is "best iterate, stagnation-aware" (issue 13/14: the stall on the
+100-crack default LP ``201 x 101``): that LP has a non-degenerate optimal vertex, but one
+multiplier is ``2.2e-7`` against a largest ``0.52`` (a constraint that is barely active).  As
+``mu -> 0`` the normal matrix's condition number grows like ``(z_max / z_min)^2 / mu`` and
+reaches ``1e14`` (the Cholesky regularisation level) near ``mu = 1e-11``; from there the
+Newton directions lose the barely active row, the dual residual stops at ``~1e-7`` and then
+*grows* (to ``2e-5``) while ``mu`` keeps falling to ``1e-100``.  The former test demanded
+primal, dual and gap residuals ``< 1e-8`` simultaneously at the *current* iterate: at
+iteration 14 the dual residual was ``2e-9`` but the gap ``1.7e-7``; at 15 the gap was
+``1.2e-8`` but the dual residual ``6.6e-8``; never both, so every LP fell back to HiGHS.  Now:
+one step of iterative refinement of the normal equations (against the unregularised matrix),
+the best iterate (smallest ``max(rp, rd, gap)``) is kept, the loop stops once that merit has
+not improved for a few iterations, and an iterate whose merit is below ``APPROX_TOL`` is handed
+to the crossover (which certifies or rejects it; nothing uncertified is returned).
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import scipy.linalg as sla
+
+from ..model import citations
+
+#: Merit (max of the relative primal, dual and gap residuals) at which the interior point stops.
+IPM_TOL = 1e-9
+#: Largest merit of a stalled iterate still handed to the crossover (which certifies it).
+APPROX_TOL = 1e-5
+#: Iterations without a 2x improvement of the best merit after which the loop stops.
+STALL_ITERS = 4
+
+
+def ipm(A, b, e, *, tol=IPM_TOL, max_iter=80):  # noqa: C901
+    """Mehrotra predictor-corrector for ``max e.x s.t. A x + s = b, s >= 0`` (dense).
+
+    Parameters
+    ----------
+    A : ndarray, shape (R, n)
+        Rows of unit norm (the callers scale them).
+    b : ndarray, shape (R,)
+    e : ndarray, shape (n,)
+    tol : float
+        Target merit ``max(|rp| / (1 + |b|), |rd| / (1 + |e|), gap)`` (relative).
+    max_iter : int
+
+    Returns
+    -------
+    x, s, z : ndarray
+        The best iterate (smallest merit); ``z >= 0`` are the multipliers (``A^T z ~ e``).
+    status : str
+        ``"converged"`` (merit ``<= tol``), ``"approximate"`` (stalled with merit
+        ``<= APPROX_TOL``: good enough to identify a basis) or ``"failed"`` (unbounded,
+        infeasible or numerical trouble).
+    iterations : int
+    """
+    R, n = A.shape
+    x = np.zeros(n)
+    s = np.maximum(b - A @ x, 1.0)
+    z = np.ones(R)
+    bn = 1.0 + np.abs(b).max(initial=0.0)
+    en = 1.0 + np.abs(e).max(initial=0.0)
+    best = (np.inf, x, s, z)
+    since = 0
+    it = 0
+    while it < max_iter:
+        it += 1
+        rp = A @ x + s - b
+        rd = A.T @ z - e
+        mu = float(s @ z) / R
+        gap = abs(float(b @ z - e @ x)) / (1.0 + abs(float(e @ x)))
+        merit = max(np.abs(rp).max() / bn, np.abs(rd).max() / en, gap)
+        if merit < 0.5 * best[0]:
+            best, since = (merit, x, s, z), 0
+        else:
+            since += 1
+        if best[0] <= tol or since >= STALL_ITERS:
+            break
+        d = z / s
+        # normal matrix A^T D A (upper triangle, symmetric rank-k update: half a GEMM)
+        As = np.asfortranarray(A * np.sqrt(d)[:, None])
+        M = sla.blas.dsyrk(1.0, As, trans=1)
+        M[np.diag_indices(n)] += 1e-14 * M.diagonal().max()
+        try:
+            cf = sla.cho_factor(M, lower=False, check_finite=False)
+        except np.linalg.LinAlgError:
+            break
+
+        def solve(rhs, cf=cf, d=d):
+            dx = sla.cho_solve(cf, rhs, check_finite=False)
+            # one step of iterative refinement against the unregularised A^T D A
+            return dx + sla.cho_solve(cf, rhs - A.T @ (d * (A @ dx)), check_finite=False)
+
+        dx, ds, dz = _direction(A, solve, rd, rp, s, z, np.zeros(R))
+        ap, ad = _step(s, ds), _step(z, dz)
+        mu_aff = float((s + ap * ds) @ (z + ad * dz)) / R
+        sigma = (mu_aff / mu) ** 3 if mu > 0 else 0.0
+        dx2, ds2, dz2 = _direction(A, solve, rd, rp, s, z, sigma * mu - ds * dz)
+        ap, ad = 0.99 * _step(s, ds2), 0.99 * _step(z, dz2)
+        x = x + ap * dx2
+        s = s + ap * ds2
+        z = z + ad * dz2
+        if not (np.all(np.isfinite(x)) and np.all(np.isfinite(z))):
+            break
+        if np.abs(x).max(initial=0.0) > 1e15 * bn or z.max() > 1e15 * en:
+            break  # diverging: unbounded primal or dual
+    merit, x, s, z = best
+    if merit <= tol:
+        status = "converged"
+    elif merit <= APPROX_TOL:
+        status = "approximate"
+    else:
+        status = "failed"
+    return x, s, z, status, it
+
+
+def _direction(A, solve, rd, rp, s, z, rc):
+    """Newton direction with complementarity target ``s z -> rc`` (``S dz + Z ds = rc - s z``)."""
+    rhs = -rd - A.T @ ((rc - s * z + z * rp) / s)
+    dx = solve(rhs)
+    ds = -rp - A @ dx
+    dz = (rc - s * z - z * ds) / s
+    return dx, ds, dz
+
+
+def _step(v, dv):
+    neg = dv < 0
+    return min(1.0, float(np.min(-v[neg] / dv[neg], initial=np.inf)))
+
+
+def identify_basis(A, z, s, n):
+    """Guess the optimal basis: the ``n`` rows with the largest ``z / s`` (non-singular)."""
+    order = np.argsort(-(z / np.maximum(s, 1e-300)), kind="stable")
+    T = np.sort(order[:n])
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", sla.LinAlgWarning)
+            lu = sla.lu_factor(A[T], check_finite=False)
+    except (np.linalg.LinAlgError, ValueError):
+        return None
+    d = np.abs(np.diag(lu[0]))
+    if d.min() <= 1e-12 * d.max():
+        return None
+    return T
+
+
+def complete_basis(A, z, s, e, n, max_missing=None):
+    """A dual-feasible basis at a degenerate interior-point optimum.
+
+    The strongly active rows ``C`` (the ``z / s`` values above the largest gap in their sorted
+    sequence) carry the multipliers; when ``|C| < n`` the basis must be completed with
+    ``k = n - |C|`` more rows whose multipliers are non-negative.  With ``Q`` an orthonormal
+    basis of ``null(A_C)``, the completion multipliers ``y`` satisfy ``Q^T A_R^T y = Q^T e``:
+    a ``k``-row LP ``min 1.y`` with ``y >= 0`` whose basic solution picks at most ``k`` rows
+    (padded by the rows of smallest slack that keep the basis non-singular).  Returns the
+    sorted basis, or ``None`` when no such completion is found.
+    """
+    from scipy.optimize import linprog
+
+    r = z / np.maximum(s, 1e-300)
+    order = np.argsort(-r, kind="stable")
+    top = np.maximum(r[order[: n + 1]], 1e-300)
+    lo = 1 if max_missing is None else max(1, n - max_missing)
+    gaps = np.log(top[lo - 1 : n]) - np.log(top[lo : n + 1])
+    m = lo + int(np.argmax(gaps))  # |C|: the cut with the largest relative drop
+    C = np.sort(order[:m])
+    k = n - m
+    if k <= 0:
+        return None
+    Qf, _ = np.linalg.qr(A[C].T, mode="complete")
+    Q = Qf[:, m:]
+    if np.linalg.matrix_rank(A[C]) < m:
+        return None
+    rest = np.setdiff1d(np.arange(A.shape[0]), C)
+    P = A[rest] @ Q  # projections of the candidate rows, (R - m, k)
+    target = Q.T @ e
+    # e in span(A_C) up to the interior point's accuracy: the completion rows carry (near) zero
+    # multipliers; pick the k best-conditioned ones (column-pivoted QR of the projections)
+    if np.abs(target).max() <= 1e-6 * (1.0 + np.abs(e).max()):
+        _, _, piv = sla.qr(P.T, mode="economic", pivoting=True)
+        chosen = rest[piv[:k]]
+    else:
+        citations.register("huangfu2018")  # scipy linprog(method="highs")
+        res = linprog(np.ones(len(rest)), A_eq=P.T, b_eq=target, bounds=(0, None),
+                      method="highs")
+        if res.status != 0:
+            return None
+        nz = np.flatnonzero(res.x > 1e-12 * max(1.0, res.x.max()))
+        chosen = rest[nz]
+        if len(chosen) < k:  # pad with the best-conditioned remaining projections
+            others = np.setdiff1d(np.arange(len(rest)), nz)
+            _, _, piv = sla.qr(P[others].T, mode="economic", pivoting=True)
+            picked = list(nz)
+            for j in others[piv]:
+                if len(picked) == k:
+                    break
+                if np.linalg.matrix_rank(P[picked + [j]]) == len(picked) + 1:
+                    picked.append(int(j))
+            chosen = rest[np.asarray(picked, dtype=int)]
+    T = np.r_[C, chosen].astype(int)
+    if len(np.unique(T)) != n:
+        return None
+    return np.sort(np.asarray(T, dtype=int))
