@@ -90,6 +90,7 @@ def apply_overrides(scene, names, overrides):
         more dots, e.g. ``model.material.E``).
     """
     import copy
+    from dataclasses import replace
 
     raw = copy.deepcopy(scene.raw)
     for item in overrides:
@@ -126,7 +127,12 @@ def apply_overrides(scene, names, overrides):
         msg = str(exc)
         msg = msg.replace(scene.label, label, 1) if scene.label in msg else f"{label}: {msg}"
         raise SceneError(msg) from None
-    return new
+    # ``raw`` stays what the *file* says (the sweep refuses a Dask scheduler named in a file but
+    # takes one from --set), except the [scene] table, whose units the verdicts read
+    file_raw = copy.deepcopy(scene.raw)
+    if "scene" in raw:
+        file_raw["scene"] = raw["scene"]
+    return replace(new, raw=file_raw)
 
 
 #: Markers around the generated option tables in README.md.

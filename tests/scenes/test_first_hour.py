@@ -150,6 +150,10 @@ def test_set_reaches_model_and_load_keys(tmp_path):
     assert changed.model["friction"] == 0.4 and changed.load["q0"] == [0.2, -0.1]
     assert changed.analyses["bounds"]["lam"] == 0.1
     assert scene.model["friction"] == 0.7  # the original scene is untouched
+    # raw keeps what the file says (the sweep refuses a scheduler named in a file, not --set)
+    assert changed.raw.get("analyses") == scene.raw.get("analyses")
+    units = apply_overrides(scene, ["bounds"], ['scene.force_unit="N"', 'scene.length_unit="mm"'])
+    assert units.units["energy"] == "N mm"
     # the answer is that of the system built by hand with the new values (cross-check)
     assert main(["bounds", "two_node_coupled", "-q", "-o", str(tmp_path),
                  "--set", "model.friction=0.4"]) == 0
