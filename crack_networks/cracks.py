@@ -8,7 +8,6 @@ normal and the tangent flip, so gap, slip and reactions are unchanged).
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -17,10 +16,11 @@ from scipy.spatial import cKDTree
 
 from shakedown.model.errors import InputError, ShapeError
 
+from .crack_files import CSV_COLUMNS, read_table, write_table
+
 __all__ = ["CrackSet", "segment_distance", "load_csv", "save_csv", "KachanovAccuracyWarning",
            "TOUCH_RTOL", "KACHANOV_GAP_RATIO"]
 
-CSV_COLUMNS = ("x", "y", "half_length", "angle")
 
 #: Two cracks *touch* when their segment distance is at most ``TOUCH_RTOL * min(a_i, a_j)``
 #: plus the rounding of the tip coordinates (``64 eps`` times their magnitude).  A T-junction
@@ -344,59 +344,13 @@ class CrackSet:
 
 def save_csv(cracks: CrackSet, path) -> None:
     """Write ``cracks`` as CSV with header ``x,y,half_length,angle`` (angle in radians)."""
-    np.savetxt(
-        os.fspath(path), cracks.to_array(), delimiter=",", header=",".join(CSV_COLUMNS),
-        comments="", fmt="%.17g",
-    )
+    write_table(cracks.to_array(), path)
 
 
 def load_csv(path) -> CrackSet:
-    """Read a crack set written by :func:`save_csv`.
+    """Read a crack set written by :func:`save_csv` (see :func:`.crack_files.read_table`).
 
     The file needs a header with the columns ``x, y, half_length`` and either ``angle``
     (radians) or ``angle_deg`` (degrees), in any order; other columns are ignored.
     """
-    # messages name the failing position and what was expected, never the file's content
-    # (a scene's `file` key may point at any readable file)
-    path = os.fspath(path)
-    if not os.path.isfile(path):
-        raise InputError(f"crack file {path!r} does not exist or is not a file")
-    try:
-        with open(path, encoding="utf-8") as fh:
-            lines = fh.read().splitlines()
-    except (UnicodeDecodeError, OSError):
-        raise InputError(f"crack file {path!r} is not a readable UTF-8 text file") from None
-    header = [h.strip().lower() for h in (lines[0] if lines else "").split(",")]
-    missing = [c for c in ("x", "y", "half_length") if c not in header]
-    if missing or not ({"angle", "angle_deg"} & set(header)):
-        need = missing + ([] if {"angle", "angle_deg"} & set(header) else ["angle or angle_deg"])
-        raise InputError(
-            f"crack file {path!r}: line 1 must have a header with columns x, y, half_length and "
-            f"angle (radians) or angle_deg; missing: {', '.join(need)}"
-        )
-    rows = []
-    for r, line in enumerate(lines[1:], start=2):
-        if not line.strip():
-            continue
-        cells = line.split(",")
-        if len(cells) != len(header):
-            raise ShapeError(f"crack file {path!r}: line {r} has {len(cells)} columns but the "
-                             f"header has {len(header)}")
-        try:
-            rows.append([float(x) for x in cells])
-        except ValueError:
-            col = next(k for k, x in enumerate(cells) if not _is_float(x))
-            raise InputError(f"crack file {path!r}: line {r}, column {col + 1} "
-                             f"({header[col]!r}) is non-numeric") from None
-    data = np.array(rows, dtype=float).reshape(-1, len(header))
-    col = {h: data[:, k] for k, h in enumerate(header)}
-    angle = col["angle"] if "angle" in col else np.deg2rad(col["angle_deg"])
-    return CrackSet(np.column_stack([col["x"], col["y"]]), col["half_length"], angle)
-
-
-def _is_float(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
+    return CrackSet(*read_table(path))

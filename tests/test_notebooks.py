@@ -1,4 +1,8 @@
-"""Every notebook runs top to bottom (at small size: SHAKEDOWN_NOTEBOOK_SMALL=1)."""
+"""Every notebook runs top to bottom (at small size: SHAKEDOWN_NOTEBOOK_SMALL=1).
+
+Each notebook is executed once per session by the ``executed_notebooks`` fixture
+(``tests/conftest.py``); the docs build renders the same executed copies.
+"""
 
 import os
 from pathlib import Path
@@ -10,16 +14,10 @@ NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.ipynb"))
 
 
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.name for p in NOTEBOOKS])
-def test_notebook_runs(path, tmp_path, monkeypatch):
-    nbformat = pytest.importorskip("nbformat")
-    nbclient = pytest.importorskip("nbclient")
-    monkeypatch.setenv("SHAKEDOWN_NOTEBOOK_SMALL", "1")
-    monkeypatch.setenv("MPLBACKEND", "Agg")
-    nb = nbformat.read(path, as_version=4)
-    client = nbclient.NotebookClient(
-        nb, timeout=600, kernel_name="python3", resources={"metadata": {"path": str(tmp_path)}}
-    )
-    client.execute()
+def test_notebook_runs(path, executed_notebooks):
+    nb, error = executed_notebooks(path)
+    if error is not None:
+        raise error
     errors = [
         o for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])
         if o.get("output_type") == "error"

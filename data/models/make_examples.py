@@ -8,7 +8,8 @@ check that reading it gives the same system:
 * ``two_node_K.mtx``, ``two_node_K.csv``: the reduced stiffness ``K = [[A, B], [B^T, C]]`` of
   the built-in scene ``two_node_coupled`` (Matrix Market, CSV);
 * ``two_node.mat``: its blocks and friction under MATLAB-style names ``Ktt``, ``Ktn``,
-  ``Knn``, ``mu`` (chosen in ``data/scenes/two_node_mat.toml``);
+  ``Knn``, ``mu`` (chosen in ``data/scenes/two_node_mat.toml``); ``two_node.npz``: the same
+  as arrays ``A``, ``B``, ``C``, ``friction``;
 * ``two_node_record.csv``: a "measured" record of the same scene's welded reactions at
   ``lam = 1``, sampled unevenly (jittered times, seeded) over 1.5 periods of 0.02 s;
 * ``square_full_K.mtx``, ``square_dofs.csv``, ``square_force.mtx``: the full (every DOF)
@@ -113,6 +114,7 @@ def main() -> None:
                      comment=" reduced stiffness of two_node_coupled, order v1 v2 w1 w2")
     np.savetxt(HERE / "two_node_K.csv", K, delimiter=",", fmt="%.17g")
     scipy.io.savemat(HERE / "two_node.mat", {"Ktt": A, "Ktn": B, "Knn": C, "mu": FRICTION})
+    np.savez(HERE / "two_node.npz", A=A, B=B, C=C, friction=np.full(2, FRICTION))
     rows = record(np.random.default_rng(20261123))
     np.savetxt(HERE / "two_node_record.csv", rows, delimiter=",", fmt="%.17g",
                header="t,q_1,p_1,q_2,p_2", comments="")

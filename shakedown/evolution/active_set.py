@@ -68,12 +68,18 @@ class ActiveSet:
         n = self.n
         dv, w = z[:n], z[n:]
         f = self.f
+        if allowed is None:  # the step problem: x / ds = x K_jj / scale, min commutes
+            d = self.diag
+            fp = f * p
+            a = dv * d[:n]
+            r = np.abs(np.minimum(w * d[n:], p)).max(initial=0.0)
+            r = max(r, np.abs(np.minimum(np.maximum(a, 0.0), fp + q)).max(initial=0.0))
+            r = max(r, np.abs(np.minimum(np.maximum(-a, 0.0), fp - q)).max(initial=0.0))
+            return float(r / scale)
         ds = scale / self.diag
         xs = (w / ds[n:], np.maximum(dv, 0) / ds[:n], np.maximum(-dv, 0) / ds[:n])
         fp = f * p
         ys = (p / scale, (fp + q) / scale, (fp - q) / scale)
-        if allowed is None:
-            return float(np.abs(np.minimum(np.concatenate(xs), np.concatenate(ys))).max())
         res = 0.0
         free_nodes = ~forced
         for k, (x, y) in enumerate(zip(xs, ys, strict=True)):

@@ -15,9 +15,16 @@ the nodes whose signs are violated switch state (all at once; on a repeated assi
 time, the most violated first; on a second repetition, a singular matrix or an exhausted
 iteration budget, the LCP in ``(w, dv+, dv-)`` is solved by lexicographic Lemke, which always
 terminates).  Factorizations are reused: LU factors are cached per assignment (LRU, bounded in
-bytes) and an assignment within ``max_update_rank`` changed nodes of the last factorized one is
-solved by a Sherman-Morrison-Woodbury update of it, so a step in which few nodes change state
-costs a few triangular solves instead of a factorization.  Every answer is verified (natural
+bytes) and an assignment within ``max(max_update_rank, update_fraction * m)`` changed nodes of
+the last factorized one is solved by a Sherman-Morrison-Woodbury update of it, so a step in
+which few nodes change state costs a few triangular solves instead of a factorization.  A warm
+step (the guess is the answer, its factor cached) is one pair of triangular solves (LAPACK
+``getrs`` called directly), one product with the rows of ``K`` kept with the factor, and
+``O(N)`` vectorised sign checks; the cycle loop passes the step's base reactions
+(:meth:`StepSolver.next_base`) so that no product with all of ``K`` is needed per step.
+Modules: :mod:`.step_types` (codes, :class:`StepResult`), :mod:`.factors` (the LU cache and
+updates), :mod:`.active_set` (the iteration and its sign checks), :mod:`.fallbacks` (Lemke,
+enumeration); this module assembles them.  Every answer is verified (natural
 complementarity residuals, scaled per node) and the outcome is a status: below the critical
 friction (``system.critical_friction()``) the solution is ``"unique"``; above it, for
 ``N <= enumerate_max_nodes`` every state assignment is enumerated and the step is classified
@@ -78,7 +85,13 @@ class StepSolver(FactorCache, ActiveSet, Fallbacks):
     cache_bytes : float
         Memory budget of the LU cache [bytes].
     max_update_rank : int
-        Largest number of changed nodes solved by a Woodbury update instead of a new LU.
+        Largest number of changed nodes solved by a Woodbury update instead of a new LU, at
+        least; see ``update_fraction``.
+    update_fraction : float
+        Above ``max_update_rank``, an update of rank ``r`` is still used while
+        ``r <= update_fraction * m`` (``m`` unknowns of the factorized system): its cost
+        ``~ 2 r m^2`` plus ``O(r N)`` gathers stays below a fresh LU's ``2/3 m^3`` (default 1/8:
+        about a third of it).  0 disables the proportional rule.
     update_min_size : int
         Woodbury updates are used only when the factorized system has at least this many
         unknowns; below it a fresh LU (cached for the next visit) is cheaper than the update's
@@ -92,7 +105,8 @@ class StepSolver(FactorCache, ActiveSet, Fallbacks):
 
     def __init__(self, system: DiscreteSystem, *, feas_tol: float = FEAS_TOL,
                  max_iter: int | None = None, cache_bytes: float = 256e6,
-                 max_update_rank: int = 6, update_min_size: int = 256,
+                 max_update_rank: int = 6, update_fraction: float = 0.125,
+                 update_min_size: int = 256,
                  enumerate_max_nodes: int = 4, check_uniqueness: bool = True):
         if not isinstance(system, DiscreteSystem):
             raise InputError(f"system must be a DiscreteSystem; got {type(system).__name__}")
@@ -114,6 +128,9 @@ class StepSolver(FactorCache, ActiveSet, Fallbacks):
         self.max_iter = 2 * n + 20 if max_iter is None else int(max_iter)
         self.cache_bytes = float(cache_bytes)
         self.max_update_rank = int(max_update_rank)
+        if not (np.isfinite(update_fraction) and 0 <= update_fraction < 1):
+            raise InputError(f"update_fraction must be in [0, 1); got {update_fraction}")
+        self.update_fraction = float(update_fraction)
         self.update_min_size = int(update_min_size)
         self.enumerate_max_nodes = int(enumerate_max_nodes)
         self.check_uniqueness = bool(check_uniqueness)

@@ -36,7 +36,7 @@ def _check_inputs(system, load, lam, initial_slip, initial_gap, method, steps_pe
         raise InputError(f"load must be a LoadCycle; got {type(load).__name__}")
     n = system.n_nodes
     check_same_nodes(system, load)
-    lam = check_load_factor(lam)
+    lam = check_load_factor(lam, load)
     if method not in ("implicit", "events"):
         raise InputError(f"method must be 'implicit' or 'events'; got {method!r}")
     steps_per_cycle = check_count("steps_per_cycle", steps_per_cycle, 2)

@@ -4,8 +4,8 @@ A node-state assignment ``s`` fixes two of ``(dv_j, w_j, q_j + s f_j p_j, p_j)``
 leaves a square system ``M_s x = h`` in the slips of the non-stick nodes and the gaps of the
 separated ones.  :class:`FactorCache` (a mixin of :class:`~.complementarity.StepSolver`) keeps
 LU factors per assignment (LRU, bounded in bytes) and solves an assignment within
-``max_update_rank`` changed nodes of the last factorized one by a Sherman-Morrison-Woodbury
-update of it.
+``max(max_update_rank, update_fraction * m)`` changed nodes of the last factorized one by a
+Sherman-Morrison-Woodbury update of it (refactorized when the update would cost more).
 """
 
 from __future__ import annotations
@@ -43,10 +43,11 @@ class FactorCache:
     def _G_rows(self, s, free, coef, jv, jw, cols):
         """Rows of the assignment's equations (a-rows ``q + c p``, b-rows ``p``) at ``cols``."""
         n = self.n
-        out = self.K.take(np.concatenate([jv, n + jw, n + jv]), axis=0).take(cols, axis=1)
-        m = jv.size + jw.size
-        out[:jv.size] += coef[:, None] * out[m:]
-        return out[:m]
+        cols = np.asarray(cols, int)
+        out = self.K[np.ix_(np.concatenate([jv, n + jw]), cols)]  # cost ~ the output's size
+        if jv.size:
+            out[:jv.size] += coef[:, None] * self.K[np.ix_(n + jv, cols)]
+        return out
 
     def _rhs(self, coef, jv, jw, q0, p0):
         return -np.concatenate([q0[jv] + coef * p0[jv], p0[jw]])
@@ -155,10 +156,12 @@ class FactorCache:
             self.totals["cache_hits"] += 1
             self._counters["cache_hits"] += 1
             self._base = F
+            self._keep_rows(F)
             return self._lu_solve(F, q0, p0)
         B0 = self._base
         if (B0 is not None and B0.free.size >= self.update_min_size
-                and np.count_nonzero(s != B0.s) <= self.max_update_rank):
+                and np.count_nonzero(s != B0.s) <= max(
+                    self.max_update_rank, self.update_fraction * B0.free.size)):
             z = self._woodbury(B0, s, q0, p0)
             if z is not None and self._equations_ok(s, z, q0, p0, scale):
                 return z
@@ -214,18 +217,19 @@ class FactorCache:
         non-zero entries are gathered (``K`` is symmetric: rows instead of strided columns).
         """
         n = self.n
-        if F is not None:
-            kr = F.krows
-            if kr is None:
-                kr = self.K[F.free]
-                if self._cache_used + kr.nbytes <= self.cache_bytes and F.key in self._cache:
-                    F.krows = kr
-                    F.nbytes += kr.nbytes
-                    self._cache_used += kr.nbytes
-            r = z[F.free] @ kr
+        if F is not None and F.krows is not None:
+            r = z[F.free] @ F.krows
         else:
             idx = np.flatnonzero(z)
             if not idx.size:
                 return q0.copy(), p0.copy()
-            r = z[idx] @ self.K[idx] if idx.size < n else self.K @ z
+            # a gather copies |idx| rows: cheaper than reading all of K below N / 2 of them
+            r = z[idx] @ self.K[idx] if 2 * idx.size < n else self.K @ z
         return q0 + r[:n], p0 + r[n:]
+
+    def _keep_rows(self, F):
+        """Keep ``K[F.free]`` with a factor met again (a cache hit), within the cache budget."""
+        if F.krows is None and self._cache_used + 16.0 * F.free.size * self.n <= self.cache_bytes:
+            F.krows = self.K[F.free]
+            F.nbytes += F.krows.nbytes
+            self._cache_used += F.krows.nbytes

@@ -53,9 +53,15 @@ class Fallbacks:
         qv = np.concatenate([c[n:], c[:n], -c[:n], np.zeros(n)])
         # scale rows (displacements by K_jj) so that Lemke's tolerances are relative
         rs = np.concatenate([self.diag[n:], self.diag[:n], self.diag[:n], np.ones(n)])
-        res = lemke(rs[:, None] * M, rs * qv)
+        # ... and divide by the force scale: Lemke's tie tolerances then see O(1) numbers in
+        # any units (the LCP is homogeneous in (q, z))
+        # ... and measure lam (a displacement) by lam K_jj: every entry of the LCP is then
+        # dimensionless (without it the lam columns carry K_jj and rounding depends on units)
+        Ms = rs[:, None] * M
+        Ms[:, 3 * n:] /= self.diag[:n]
+        res = lemke(Ms, rs * qv / scale)
         self.totals["lemke_pivots"] += res.pivots
-        x = res.z
+        x = res.z * scale
         p = x[:n]
         q = x[n:2 * n] - x[2 * n:3 * n]
         z = G @ (np.concatenate([q, p]) - np.concatenate([q0, p0]))
@@ -131,10 +137,13 @@ class Fallbacks:
         use = np.concatenate([allowed[act, SEPARATED], allowed[act, FORWARD],
                               allowed[act, BACKWARD]])
         idx = np.flatnonzero(use)
-        res = lemke(Mfull[np.ix_(idx, idx)], qfull[idx])
+        # dimensionless LCP (stiffness / ks, forces / scale): Lemke's tie tolerances are then
+        # relative in any units; z = z' scale / ks
+        ks = float(self.diag.max())
+        res = lemke(Mfull[np.ix_(idx, idx)] / ks, qfull[idx] / scale)
         self.totals["lemke_pivots"] += res.pivots
         x = np.zeros(3 * m)
-        x[idx] = res.z
+        x[idx] = res.z * (scale / ks)
         basic = np.zeros(3 * m, bool)
         nb = res.basis[(res.basis >= idx.size) & (res.basis < 2 * idx.size)] - idx.size
         basic[idx[nb]] = True

@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..model.errors import InputError
+from ..model.validation import check_count
 from .steady_maps import (
     FD_STEP,
     _anderson,
@@ -157,8 +158,7 @@ def steady_cycle(system, load, lam: float, initial_slip=None, *, method: str = "
         raise InputError(f"period must be 'auto', 1 or 2; got {period!r}")
     if accelerator not in ("auto", "newton", "anderson"):
         raise InputError(f"accelerator must be 'auto', 'newton' or 'anderson'; got {accelerator!r}")
-    if int(max_evaluations) < 4:
-        raise InputError(f"max_evaluations must be >= 4; got {max_evaluations}")
+    check_count("max_evaluations", max_evaluations, 4)
     if not (np.isfinite(tol) and tol > 0):
         raise InputError(f"tol must be a positive number; got {tol}")
     acc = accelerator if accelerator != "auto" else ("newton" if n <= 12 else "anderson")

@@ -96,7 +96,7 @@ class _PeriodMap:
 
 def _check_common(system, load, lam):
     check_same_nodes(system, load)
-    return check_load_factor(lam)
+    return check_load_factor(lam, load)
 
 
 def _check_slip(name, value, n):

@@ -132,5 +132,7 @@ def kinematic_states(dv, w, dtol):
     ``dtol`` has shape (2N,) (slip tolerances, then gap tolerances).
     """
     n = dv.shape[-1]
-    st = np.where(dv > dtol[:n], FORWARD, np.where(dv < -dtol[:n], BACKWARD, STICK))
-    return np.where(w > dtol[n:], SEPARATED, st).astype(np.int8)
+    st = (dv > dtol[..., :n]).astype(np.int8)  # FORWARD = 1, else STICK = 0
+    st[dv < -dtol[..., :n]] = BACKWARD
+    st[w > dtol[..., n:]] = SEPARATED
+    return st

@@ -16,14 +16,30 @@ def check_same_nodes(system, load) -> None:
         )
 
 
-def check_load_factor(lam) -> float:
-    """A finite load factor ``lam >= 0`` as a float."""
+def check_load_factor(lam, load=None) -> float:
+    """A finite load factor ``lam >= 0`` as a float.
+
+    With ``load`` (a LoadCycle), the welded reactions ``r_0 + lam r_1`` must be representable:
+    their bound ``max|r_0| + lam * max|r_1|`` must be finite (else the solvers would compute
+    with inf and NaN).
+    """
     try:
         lam = float(lam)
     except (TypeError, ValueError) as exc:
         raise InputError(f"lam must be a number >= 0; got {lam!r}") from exc
     if not np.isfinite(lam) or lam < 0:
         raise InputError(f"lam must be a finite number >= 0; got {lam}")
+    if load is not None:
+        parts = ([load.q_cos, load.q_sin, load.p_cos, load.p_sin] if load.kind == "harmonic"
+                 else [load.q1, load.p1])
+        r1 = sum(float(np.abs(a).max(initial=0.0)) for a in parts)
+        r0 = max(float(np.abs(load.q0).max()), float(np.abs(load.p0).max()))
+        with np.errstate(over="ignore"):
+            if not np.isfinite(r0 + lam * r1):
+                raise InputError(
+                    f"lam = {lam:g} makes the welded reactions overflow (periodic part up to "
+                    f"{r1:.3g} per unit lam); use a smaller lam or express forces in larger units"
+                )
     return lam
 
 
@@ -38,13 +54,20 @@ def check_positive(name: str, value, *, unit: str = "") -> float:
     return x
 
 
-def check_count(name: str, value, minimum: int) -> int:
-    """``value`` as an integer ``>= minimum``; bools, NaN, fractions and text are refused."""
+#: Largest count (samples, steps per period, ...) accepted: 1e7 samples of one node already
+#: take 80 MB; more is a typo (e.g. 1e300), not a resolution anyone needs.
+MAX_COUNT = 10**7
+
+
+def check_count(name: str, value, minimum: int, maximum: int = MAX_COUNT) -> int:
+    """``value`` as an integer in ``[minimum, maximum]``; bools, NaN, fractions, text refused."""
     ok = isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
     if not ok and isinstance(value, (float, np.floating)) and np.isfinite(value):
         ok = float(value).is_integer()
     if not ok or int(value) < minimum:
         raise InputError(f"{name} must be an integer >= {minimum}; got {value!r}")
+    if int(value) > maximum:
+        raise InputError(f"{name} must be an integer <= {maximum:.0e}; got {value!r}")
     return int(value)
 
 

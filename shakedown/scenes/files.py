@@ -3,7 +3,7 @@
 A scene has four tables::
 
     [scene]                 # optional: name, description
-    name = "two-node coupled"
+    name = "two-node coupled"   # a plain name (no '/', '\\', ':', '..'): the output folder
 
     [model]                 # how to build the DiscreteSystem; `kind` picks the builder
     kind = "matrices"       # "matrices" | "crack_network" | "fe" | "half_plane"
@@ -189,7 +189,7 @@ def scene_from_dict(raw: dict, path: Path | None = None) -> Scene:
         raise SceneError(f"{label}: missing table [model] (with kind = one of {sorted(MODEL_KINDS)})")
     _require_table(label, "model", model)
     kind = model.get("kind")
-    if kind not in MODEL_KINDS:
+    if not isinstance(kind, str) or kind not in MODEL_KINDS:
         raise SceneError(
             f"{label}: [model] key 'kind' = {kind!r} is not allowed; "
             f"allowed: {', '.join(repr(k) for k in MODEL_KINDS)}"

@@ -38,12 +38,25 @@ DEPENDENCIES = ("numpy", "scipy", "highspy", "cvxpy", "matplotlib", "pandas", "s
 
 #: Keys of ``[model]`` / ``[load]`` (and nested tables) that name files beside the scene.
 _FILE_KEY = re.compile(r"^(file|.*_file)$")
-_BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
+_BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
 
 
 # ------------------------------------------------------------------ TOML writing
+def _toml_string(text: str) -> str:
+    """A TOML basic string: quotes, backslashes and control characters escaped."""
+    out = []
+    for ch in text:
+        if ch in '"\\':
+            out.append("\\" + ch)
+        elif ord(ch) < 0x20 or ord(ch) == 0x7F:
+            out.append(f"\\u{ord(ch):04x}")
+        else:
+            out.append(ch)
+    return '"' + "".join(out) + '"'
+
+
 def _toml_key(key: str) -> str:
-    return key if _BARE_KEY.match(key) else json.dumps(key, ensure_ascii=False)
+    return key if _BARE_KEY.fullmatch(key) else _toml_string(key)
 
 
 def _toml_value(value) -> str:
@@ -58,7 +71,7 @@ def _toml_value(value) -> str:
             return "inf" if value > 0 else "-inf"
         return repr(value)  # shortest round-trip text: read back as the same double
     if isinstance(value, str):
-        return json.dumps(value, ensure_ascii=False)
+        return _toml_string(value)
     if isinstance(value, (list, tuple)):
         return "[" + ", ".join(_toml_value(v) for v in value) + "]"
     if isinstance(value, dict):
@@ -95,7 +108,7 @@ def _absolute_files(table: dict, directory: Path) -> dict:
     for key, value in table.items():
         if isinstance(value, dict):
             value = _absolute_files(value, directory)
-        elif isinstance(value, str) and _FILE_KEY.match(key):
+        elif isinstance(value, str) and _FILE_KEY.fullmatch(key):
             value = str((directory / value).resolve())
         out[key] = value
     return out
@@ -106,7 +119,7 @@ def _files(table: dict) -> list[str]:
     for key, value in table.items():
         if isinstance(value, dict):
             found += _files(value)
-        elif isinstance(value, str) and _FILE_KEY.match(key):
+        elif isinstance(value, str) and _FILE_KEY.fullmatch(key):
             found.append(value)
     return found
 
@@ -216,6 +229,8 @@ class RunRecord:
             "resolved_scene_file": "scene.resolved.toml",
             "resolved_scene": self.tables,
             "seeds": _seeds({k: self.tables[k] for k in ("model", "load", "analyses")}),
+            "input_notes": (builder.provenance(self.tables["model"], self.tables["load"])
+                            if hasattr(builder, "provenance") else {}),
             "input_files": inputs,
             "dependencies": dependency_versions(),
             "machine": machine(),

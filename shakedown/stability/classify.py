@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model.errors import InputError, ShapeError
+from ..model.validation import check_count, real_array
 
 FREE, STICK, SLIP, FRICTIONLESS = "free", "stick", "slip", "frictionless"
 STATES = (FREE, STICK, SLIP, FRICTIONLESS)
@@ -64,7 +65,7 @@ class NodePartition:
         bad = [s for s in states if s not in STATES]
         if bad:
             raise InputError(f"states must be in {STATES}; got {bad[0]!r}")
-        chi = np.asarray(self.chi, dtype=float)
+        chi = real_array("chi", self.chi)
         if chi.shape != states.shape:
             raise ShapeError(f"chi must have shape {states.shape}; got {chi.shape}")
         slip = states == SLIP
@@ -72,7 +73,10 @@ class NodePartition:
             j = int(np.flatnonzero(slip & (np.abs(chi) != 1.0))[0])
             raise InputError(f"chi must be +1 or -1 at slip nodes; node {j} has chi = {chi[j]}")
         chi = np.where(slip, chi, 0.0)
-        margin = np.broadcast_to(np.asarray(self.margin, dtype=float), states.shape).copy()
+        margin = real_array("margin", self.margin)
+        if margin.shape not in ((), states.shape):
+            raise ShapeError(f"margin must be a number or have shape {states.shape}")
+        margin = np.broadcast_to(margin, states.shape).copy()
         for name, arr in (("states", states), ("chi", chi), ("margin", margin)):
             arr.setflags(write=False)
             object.__setattr__(self, name, arr)
@@ -89,18 +93,23 @@ class NodePartition:
         ``chi`` (scalar or shape (N,)) is required when some node slips.
         """
         states = np.asarray(states, dtype=object)
+        if states.ndim != 1 or states.shape[0] == 0:
+            raise ShapeError(f"states must be a non-empty list of node states; got {states!r}")
         n = states.shape[0]
         if chi is None:
             if np.any(states == SLIP):
                 raise InputError("chi is required when some node is in impending slip")
             chi = np.zeros(n)
-        chi = np.broadcast_to(np.asarray(chi, dtype=float), (n,))
+        chi = real_array("chi", chi)
+        if chi.shape not in ((), (n,)):
+            raise ShapeError(f"chi must be a number or have shape ({n},); got {chi.shape}")
+        chi = np.broadcast_to(chi, (n,))
         return cls(states, chi, np.full(n, np.nan), np.zeros(0, int), ())
 
     @classmethod
     def all_slip(cls, n_nodes: int, chi=1.0) -> NodePartition:
         """Every node in impending slip in direction ``chi`` (seed 000 s.7.1)."""
-        return cls.from_states([SLIP] * int(n_nodes), chi)
+        return cls.from_states([SLIP] * check_count("n_nodes", n_nodes, 1), chi)
 
     # ------------------------------------------------------------------ views
     @property
@@ -158,7 +167,7 @@ class NodePartition:
 
 
 def _vector(name, value, n=None):
-    arr = np.asarray(value, dtype=float)
+    arr = real_array(name, value)
     if arr.ndim == 0 and n is not None:
         arr = np.full(n, float(arr))
     if arr.ndim != 1 or (n is not None and arr.shape[0] != n):

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model.errors import InputError
+from ..model.validation import real_array
 from .classify import CLASSIFY_RTOL, SLIP, classify_nodes
 from .mceip import mceip_mu
 
@@ -121,7 +122,10 @@ def stability_along_cycle(
             raise InputError(f"at t = {t} the table must list nodes 0..{n - 1} exactly once")
     chosen = set()
     if times is not None:
-        for t in np.atleast_1d(np.asarray(times, float)):
+        times = real_array("times", times)
+        if times.ndim > 1 or not np.all(np.isfinite(times)):
+            raise InputError("times must be a finite number or a 1-D array of times [cycles]")
+        for t in np.atleast_1d(times):
             chosen.add(float(all_t[np.argmin(np.abs(all_t - t))]))
     parts = {}
     prev = None

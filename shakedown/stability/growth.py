@@ -244,7 +244,7 @@ def lam_mu_curves(
                         lambda x, J=J, m=m, sgn=sgn: sgn * _mu_on_support(Kfun, partition,
                                                                  friction_profile, x, J, m)[0],
                         bounds=(br.lam[k - 1], br.lam[k + 1]), method="bounded",
-                        options={"xatol": 1e-10 * max(1.0, br.lam[k + 1])},
+                        options={"xatol": 1e-10 * br.lam[k + 1]},  # relative: lam has units
                     )
                     if np.isfinite(opt.fun):
                         L, m = float(opt.x), float(sgn * opt.fun)
@@ -309,7 +309,9 @@ def growth_rates(
                     return _mu_on_support(Kfun, partition, friction_profile, L, J, target)[0] - mu
 
                 try:
-                    L = brentq(g, br.lam[k], br.lam[k + 1], xtol=1e-13, rtol=1e-12)
+                    # xtol relative to the scanned range: growth rates carry units (1 / time)
+                    L = brentq(g, br.lam[k], br.lam[k + 1], rtol=1e-12,
+                               xtol=1e-13 * float(abs(curves.lam[-1])))
                 except ValueError:  # support changed inside the interval: interpolate
                     L = float(np.interp(0.0, f[k:k + 2] * np.sign(f[k + 1] - f[k]),
                                         br.lam[k:k + 2]))

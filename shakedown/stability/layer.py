@@ -33,12 +33,14 @@ from scipy.optimize import brentq
 
 from ..model import citations
 from ..model.errors import InputError
+from ..model.validation import check_positive, check_stiffness, real_array
 
 
 def _Dm(D):
-    D = np.asarray(D, dtype=float)
+    D = real_array("D", D)
     if D.shape != (3, 3):
         raise InputError(f"D must be the (3, 3) in-plane stiffness (xx, yy, xy); got {D.shape}")
+    D = check_stiffness("D", D)
     return np.array([[D[2, 2], D[1, 2]], [D[1, 2], D[1, 1]]])
 
 
@@ -57,8 +59,10 @@ def layer_critical_friction(D) -> tuple[float, float]:
 def layer_dynamic_stiffness(D, s: float, height: float = 1.0, density: float = 1.0):
     """``Z(s)`` (2x2, per unit area, order (tangential, normal)) of the layer's bottom face."""
     Dm = _Dm(D)
-    if s < 0:
-        raise InputError(f"s = lam^2 must be >= 0; got {s}")
+    height = check_positive("height", height, unit=" [length]")
+    density = check_positive("density", density, unit=" [mass / volume]")
+    if not (np.isfinite(s) and s >= 0):
+        raise InputError(f"s = lam^2 must be finite and >= 0; got {s}")
     if s == 0:
         return Dm / height
     d, E = np.linalg.eigh(Dm)
@@ -103,5 +107,8 @@ def layer_growth_rates(D, mu: float, *, chi: float | None = None, height: float 
     for a, b, fa, fb in zip(grid[:-1], grid[1:], f[:-1], f[1:], strict=True):
         if np.isfinite(fa) and np.isfinite(fb) and fa * fb <= 0 and fa != fb:
             roots.append(brentq(lambda L: layer_mu(D, L, chi, height, density)[0] - mu, a, b,
-                                xtol=1e-14, rtol=1e-14))
-    return np.unique(np.round(np.array(roots), 13))
+                                xtol=1e-14 * lam_max, rtol=1e-14))
+    # a root found from both sides of a grid point counts once (relative to the range scanned)
+    roots = np.sort(np.array(roots))
+    return roots[np.concatenate([[True], np.diff(roots) > 1e-12 * lam_max])] if roots.size \
+        else roots

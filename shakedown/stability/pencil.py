@@ -184,7 +184,9 @@ def slip_pencil(
         raise InputError(f"lam must be a number >= 0; got {lam!r}") from None
     if not (np.isfinite(lam) and lam >= 0):
         raise InputError(f"lam must be finite and >= 0; got {lam}")
-    K = real_array("K(s)", as_dynamic_stiffness(stiffness, mass)(lam**2))
+    if not np.isfinite(lam * lam):
+        raise InputError(f"lam = {lam:g} is too large: lam^2 overflows")
+    K = real_array("K(s)", as_dynamic_stiffness(stiffness, mass)(lam * lam))
     n = partition.n_nodes
     if K.shape != (2 * n, 2 * n):
         raise ShapeError(

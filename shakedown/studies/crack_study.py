@@ -10,8 +10,8 @@ and the verdict (:mod:`.summary`).  Load factors and states: :mod:`.design`.
 Work per run
 ------------
 One task per (realisation, load factor) runs *all* initial states with one step solver, so the
-factorisations of the active sets that the states share are computed once
-(:func:`shakedown.evolution.complementarity.StepSolver` caches them); the system (Kachanov
+factorisations of the active sets that the states share are computed once (the solver caches
+them); the system (Kachanov
 matrices, critical friction) is built once per realisation and process (:func:`realisation_model`,
 cached); the bounds skip the separation LP the study does not use.
 
@@ -104,7 +104,11 @@ def _point_task(spec: SweepSpec, r: int, point: str, lam: float, lam2: float,
     _, model, load = realisation_model(spec, r)
     system = model.system
     states = _states(spec, r, safe_state)
-    solver = StepSolver(system)  # shared by the states of this task only: deterministic
+    # one step solver for the states of this task only, states in a fixed order:
+    # deterministic.  The states run one after the other: solve_cycles' batched path (2-D
+    # initial_slip) was measured 2x slower per run on the default network (0.9 s against
+    # 0.4 s per run, benchmarks/RESULTS_study.md), so it is not used here.
+    solver = StepSolver(system)
     rows = []
     for j, v0 in enumerate(states):
         row = dict(realisation=r, point=point, lam=float(lam),

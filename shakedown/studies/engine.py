@@ -21,8 +21,8 @@ import pandas as pd
 
 from ..model import citations
 from ..model.errors import InputError, SolverError
+from ..model.progress import progress_bar
 from . import tables
-from .progress import Progress
 from .tables import KEY
 from .workers import Workers
 
@@ -185,7 +185,7 @@ def run_tasks(
 def _execute(todo, st, backend, progress, desc, on_error, max_in_flight, flush_interval,
              n_total, n_resumed, failed):
     window = max_in_flight or (1 if backend.kind == "inline" else 2 * backend.slots)
-    bar = Progress(n_total, n_resumed, desc) if progress else None
+    bar = progress_bar(n_total, desc=desc, initial=n_resumed, unit="task") if progress else None
     buffer: list[dict] = []
     last_flush = time.perf_counter()
     pending: dict = {}

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["initial_slips", "initial_slip", "run_row"]
+__all__ = ["initial_slips", "initial_slip", "run_row", "row_of_run"]
 
 
 def initial_slips(system, load, n_states: int, seed, *, scale: float = 2.0) -> np.ndarray:
@@ -62,21 +62,33 @@ def run_row(system, load, lam: float, slip, solver: dict, *, step_solver=None) -
     An exception (bad input, a bug) propagates: it is not a result, so it is not stored and
     the task runs again when the sweep is resumed.
 
-    ``step_solver``: a :class:`~shakedown.StepSolver` of ``system`` to reuse (its factor cache)
-    across the runs of one task; by default a fresh one.  Reuse changes results only in the
-    last bits (the cache chooses between an LU solve and a low-rank update), so a task that
-    reuses one must run its states in a fixed order to stay bit-reproducible.
+    ``slip`` of shape (n_states, N) runs the states together (``solve_cycles``'s batched path:
+    one solver, shared factorisations) and returns a list of rows, one per state.
+
+    ``step_solver``: a :class:`~shakedown.StepSolver` of ``system`` to reuse (its factor cache);
+    by default a fresh one.  Reuse changes results only in the last bits (the cache chooses
+    between an LU solve and a low-rank update), so a task that reuses one must run its states
+    in a fixed order to stay bit-reproducible.
     """
-    from ..evolution.complementarity import FEAS_TOL, STATE_NAMES, StepSolver
+    from ..evolution.complementarity import StepSolver
     from ..evolution.cycles import solve_cycles
 
-    n = system.n_nodes
     # Never the process-wide solver: it keeps LU factors and low-rank updates from earlier
     # runs, and answers would then depend (in the last bits) on which runs the same process
     # did before -- i.e. on the number of workers.
-    run = solve_cycles(system, load, float(lam), initial_slip=np.asarray(slip, float),
-                       solver=step_solver if step_solver is not None else StepSolver(system),
-                       **solver)
+    runs = solve_cycles(system, load, float(lam), initial_slip=np.asarray(slip, float),
+                        solver=step_solver if step_solver is not None else StepSolver(system),
+                        **solver)
+    if isinstance(runs, list):
+        return [row_of_run(system, run) for run in runs]
+    return row_of_run(system, runs)
+
+
+def row_of_run(system, run) -> dict:
+    """The row of :func:`run_row` for a finished :class:`~shakedown.CycleRun`."""
+    from ..evolution.complementarity import FEAS_TOL, STATE_NAMES
+
+    n = system.n_nodes
     row = dict(W=float(run.steady_dissipation), cycles_to_steady=int(run.cycles_to_steady),
                n_cycles=int(run.n_cycles), period=int(run.period),
                shook_down=bool(run.shook_down), frac_slip=np.nan, frac_open=np.nan,

@@ -5,7 +5,8 @@ output folder, a copied store).  Writing through a link would overwrite the file
 so every write of :mod:`shakedown.studies` goes through :func:`write_atomic`: the bytes go to a
 new file (``O_CREAT | O_EXCL | O_NOFOLLOW``) next to the target, are fsync'd, and the new file
 is renamed over the target (``os.replace`` replaces a link itself, never what it points to).
-A target or folder that *is* a link is refused with :class:`~shakedown.InputError`, so a linked
+A target or folder that *is* a link is refused with
+:class:`~shakedown.model.errors.UnsafePathError` (an ``InputError``), so a linked
 file is never silently replaced either.
 """
 
@@ -16,13 +17,13 @@ import os
 import uuid
 from pathlib import Path
 
-from ..model.errors import InputError
+from ..model.errors import UnsafePathError
 
 __all__ = ["refuse_link", "write_atomic", "fsync_dir"]
 
 
 def refuse_link(path, what: str = "file") -> Path:
-    """``path`` as a Path; :class:`InputError` if it, or its parent folder, is a symbolic link.
+    """``path`` as a Path; :class:`UnsafePathError` if it or its parent folder is a symbolic link.
 
     Parameters
     ----------
@@ -33,7 +34,7 @@ def refuse_link(path, what: str = "file") -> Path:
     path = Path(path)
     for p in (path, path.parent):
         if p.is_symlink():
-            raise InputError(
+            raise UnsafePathError(
                 f"{what} {path}: {p} is a symbolic link (to {os.readlink(p)}); shakedown does not "
                 "write through links, so that it never overwrites a file elsewhere. Use a plain "
                 "folder (remove the link, or point the output somewhere else)")

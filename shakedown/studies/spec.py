@@ -73,7 +73,7 @@ class SweepSpec:
     n_realisations: int = 1
     lams: str | tuple = "auto"
     n_lams: int = 12
-    lam_span: tuple = (0.5, 2.0)
+    lam_span: tuple = (0.5, 2.5)
     n_band: int = 5
     n_adj: int = 2
     n_refine: int = 2

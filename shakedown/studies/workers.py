@@ -129,9 +129,10 @@ class Workers:
         if scheduler is not None:
             try:
                 import distributed
-            except ImportError as exc:
-                raise MissingDependencyError(f'scheduler needs Dask ({exc}): pip install '
-                                             '"shakedown[parallel]"') from None
+            except ImportError as exc:  # Dask is the one optional extra (issue 9)
+                raise MissingDependencyError(
+                    f"scheduler = {scheduler!r} needs Dask ({exc}): pip install "
+                    "\"shakedown[parallel]\"") from exc
             self._distributed = distributed
             if isinstance(scheduler, distributed.Client):
                 self._client = scheduler

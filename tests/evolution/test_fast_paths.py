@@ -82,13 +82,16 @@ def test_warm_steps_equal_fresh_solver_and_lemke(seed):
 
 
 @pytest.mark.parametrize("seed", range(3))
-def test_woodbury_updates_equal_refactorisation(seed):
-    """Low-rank updates forced on every changed assignment against fresh LU factors only."""
+@pytest.mark.parametrize("rank", [dict(max_update_rank=8, update_fraction=0.0),
+                                  dict(max_update_rank=0, update_fraction=0.9)])
+def test_woodbury_updates_equal_refactorisation(seed, rank):
+    """Low-rank updates forced on every changed assignment (a fixed rank cap, or up to 90 % of
+    the factorized system's order) against fresh LU factors only."""
     rng = np.random.default_rng(10 + seed)
     n = 40
     s = coupled(rng, n, 0.4)
-    upd = StepSolver(s, update_min_size=0, max_update_rank=8)
-    ref = StepSolver(s, max_update_rank=0)
+    upd = StepSolver(s, update_min_size=0, **rank)
+    ref = StepSolver(s, max_update_rank=0, update_fraction=0.0)
     load = harmonic_load(rng, s, 1.0)
     qg, pg = load.evaluate(np.arange(1, 41) / 40, 1.0)
     v1 = v2 = np.zeros(n)
@@ -152,6 +155,8 @@ def test_batched_states_bad_input():
         sd.solve_cycles(s, load, 1.0, initial_slip=np.zeros((2, 3)), initial_gap=np.zeros((3, 3)))
     with pytest.raises(sd.InputError, match="n_states >= 1"):
         sd.solve_cycles(s, load, 1.0, initial_slip=np.zeros((0, 3)))
+    with pytest.raises(sd.InputError, match=r"update_fraction must be in \[0, 1\); got 1.5"):
+        StepSolver(s, update_fraction=1.5)
 
 
 # ---------------------------------------------------------------------------- self-checks
@@ -239,3 +244,29 @@ def test_answers_are_scale_free(seed, k_exp, f_exp):
                                                                 abs=1e-9 * Wscale)
     np.testing.assert_allclose(b.final_slip * sK / sF, a.final_slip, rtol=0,
                                atol=slip_tol(s, a.force_scale))
+
+
+@pytest.mark.parametrize("sK, sF", [(3.7e-6, 2.1e11), (4.3e9, 7.7e-5), (1.0, 1.0)])
+def test_lemke_fallbacks_are_scale_free(sK, sF):
+    """Both Lemke fallbacks on the same step in other units give the same answer rescaled."""
+    rng = np.random.default_rng(5)
+    n = 6
+    s = coupled(rng, n)
+    s2 = sd.DiscreteSystem(sK * s.A, sK * s.B, sK * s.C, friction=s.friction)
+    q0 = 2.0 * rng.normal(size=n)
+    p0 = rng.uniform(-0.5, 1.5, n)  # some nodes pulled open
+    scale = float(max(np.abs(q0).max(), np.abs(p0).max()))
+    allowed, forced = np.ones((n, 4), bool), np.zeros(n, bool)
+    ref = StepSolver(s)._lemke_flexibility(q0, p0, scale)
+    assert ref.success
+    for name in ("flex", "mixed"):
+        a = (StepSolver(s)._lemke_flexibility(q0, p0, scale) if name == "flex" else
+             StepSolver(s)._lemke(q0, p0, allowed, forced, scale))
+        b = (StepSolver(s2)._lemke_flexibility(sF * q0, sF * p0, sF * scale) if name == "flex"
+             else StepSolver(s2)._lemke(sF * q0, sF * p0, allowed, forced, sF * scale))
+        assert a.success and b.success
+        np.testing.assert_array_equal(a.s, b.s)
+        # the slip tolerance of the step (answers of the same pivots, rounding ~1e-14)
+        tol = np.concatenate([slip_tol(s, scale) * np.ones(n), slip_tol(s, scale) * np.ones(n)])
+        np.testing.assert_array_less(np.abs(b.z * sK / sF - a.z), tol)
+        np.testing.assert_array_less(np.abs(a.z - ref.z), tol)

@@ -134,7 +134,7 @@ def test_result_is_frozen_and_counts_are_consistent(fig8):
         (dict(lam=-1.0), "lam must be a finite number >= 0"),
         (dict(period=3), "period must be 'auto', 1 or 2"),
         (dict(accelerator="broyden"), "accelerator must be"),
-        (dict(max_evaluations=2), "max_evaluations must be >= 4"),
+        (dict(max_evaluations=2), "max_evaluations must be an integer >= 4"),
         (dict(tol=0.0), "tol must be a positive number"),
     ],
 )

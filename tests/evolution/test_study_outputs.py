@@ -84,3 +84,94 @@ def test_uniqueness_verdict_near_its_tolerance(near_states):
         s2 = uniqueness_study(p.system, p.load, p.lam, states, n_jobs=1, steps_per_cycle=32,
                               max_cycles=300, w_rtol=factor * spread / scale)
         assert s2.unique_dissipation is unique, (factor, s2.summary())
+
+
+def test_a_node_slipping_a_little_every_cycle_is_not_stuck():
+    """Single node (k = 2, f = 0.4, P = 3), tangential amplitude 1e-4 above the slip threshold
+    f P: it slips 2 (lam Q1 - f P) / k = 1.2e-4 each way every cycle, 1e-4 of its natural slip
+    f P / k (MODEL.md s.4; closed form W = 4 f P (lam Q1 - f P) / k).  Small, but 1e6 times the
+    solver's steady-state tolerance: it is slipping, not stuck, and not shaken down."""
+    k, f, P = 2.0, 0.4, 3.0
+    s = sd.DiscreteSystem([[k]], [[0.0]], [[5.0]], friction=f)
+    Q1 = f * P * (1 + 1e-4)
+    load = sd.LoadCycle.from_harmonics([0.0], [P], q_cos=[Q1])
+    for method in ("implicit", "events"):
+        run = sd.solve_cycles(s, load, 1.0, method=method, steps_per_cycle=16)
+        assert run.status == "periodic"
+        assert run.stuck_nodes.size == 0 and not run.shook_down
+        # implicit steps at t = 0, 1/2 hit the extremes: exact up to the steady tolerance
+        # (1e-10 relative change per cycle) on a W that is itself 1e-4 of (f P)^2 / k
+        W = 4 * f * P * (Q1 - f * P) / k
+        assert run.steady_dissipation == pytest.approx(W, rel=1e-6)
+
+
+def period_two_system():
+    """The coupled system of test_evolution.test_period_two_orbit_detected (seeded search):
+    its 32-step implicit evolution settles on a 2T orbit; its period-1 fixed point repels."""
+    rng = np.random.default_rng(231)
+    n = int(rng.integers(2, 4))
+    M = rng.normal(size=(2 * n, 2 * n))
+    K = M @ M.T + 0.3 * n * np.eye(2 * n)
+    s = sd.DiscreteSystem(K[:n, :n], K[:n, n:], K[n:, n:], friction=1.0)
+    s = s.with_friction(rng.uniform(0.3, 0.95) * min(s.critical_friction().value, 2.0))
+    load = sd.LoadCycle.from_harmonics(
+        rng.normal(size=n), rng.uniform(0.5, 3, n), q_cos=rng.normal(size=n),
+        q_sin=rng.normal(size=n), p_cos=rng.normal(size=n), p_sin=rng.normal(size=n))
+    lam, v0 = rng.uniform(0.5, 2), rng.normal(size=n)
+    return s, load, lam, v0
+
+
+def test_steady_cycle_finds_the_attracting_period_two_orbit():
+    s, load, lam, v0 = period_two_system()
+    plain = sd.solve_cycles(s, load, lam, initial_slip=v0, steps_per_cycle=32)
+    assert plain.period == 2
+    sc = sd.steady_cycle(s, load, lam, v0, steps_per_cycle=32)
+    # verified by simulation: period 2, the plain cycling's W (both converge to tol = 1e-10
+    # relative change per cycle; measured agreement 1e-15)
+    assert sc.status == "converged" and sc.period == 2, sc.message
+    assert sc.steady_dissipation == pytest.approx(plain.steady_dissipation, rel=1e-9)
+    assert sc.n_evaluations < 100
+    # restricted to period 1, the only fixed point repels (spectral radius 1.52 measured): it
+    # must not be reported as a steady cycle; plain cycling then finds the 2T orbit
+    sc1 = sd.steady_cycle(s, load, lam, v0, steps_per_cycle=32, period=1)
+    assert sc1.status == "cycling" and "repelling" in sc1.message, sc1.message
+    assert sc1.spectral_radius > 1.0 and sc1.period == 2
+    assert sc1.steady_dissipation == pytest.approx(plain.steady_dissipation, rel=1e-9)
+
+
+@pytest.mark.parametrize("units", [1.0, 1e-6, 2.5e9])
+def test_natural_slip_scale_is_its_documented_formula(units):
+    """s_k = (f_k |p0_k| + |q0_k| + lam (max_t |q1_k| + f_k max_t |p1_k|)) / A_kk: the scale of
+    the sampled initial states and of the uniqueness verdict.  Maxima of the harmonics by dense
+    sampling (2^14 points: relative error < 1e-7 of the amplitude); slips do not change when
+    forces and stiffness change units together."""
+    rng = np.random.default_rng(3)
+    n = 3
+    L = rng.normal(size=(2 * n, 2 * n))
+    K = units * (L @ L.T + 2 * np.eye(2 * n))
+    f = np.array([0.2, 0.5, 0.7])
+    s = sd.DiscreteSystem(K[:n, :n], K[:n, n:], K[n:, n:], friction=f)
+    q0, p0 = units * rng.normal(size=n), units * rng.uniform(1, 2, n)
+    qc, qs, pc = units * rng.normal(size=(3, n))
+    load = sd.LoadCycle.from_harmonics(q0, p0, q_cos=qc, q_sin=qs, p_cos=pc)
+    t = np.arange(2**14) / 2**14
+    q1, p1 = load.periodic(t)
+    for lam in (0.0, 0.7, 2.0):
+        expected = (f * np.abs(p0) + np.abs(q0)
+                    + lam * (np.abs(q1).max(axis=0) + f * np.abs(p1).max(axis=0))) / np.diag(s.A)
+        np.testing.assert_allclose(natural_slip_scale(s, load, lam), expected, rtol=1e-7)
+
+
+def test_unsettled_runs_prevent_a_unique_verdict():
+    """UniquenessStudy.unique_dissipation needs *every* run to reach a steady cycle.  Seed 002
+    Fig. 8 system (memory fades by 0.67 per cycle): from its steady start a run settles at once,
+    from (-0.3, 0.3) it needs ~100 cycles, so with max_cycles = 10 one run is unsettled; the one
+    settled W alone (spread 0) must not make the verdict 'unique'."""
+    p = gallery.fig8_coupled_one_at_a_time()
+    sc = sd.steady_cycle(p.system, p.load, p.lam, steps_per_cycle=p.steps_per_cycle)
+    states = np.array([sc.slip, [-0.3, 0.3]])
+    study = uniqueness_study(p.system, p.load, p.lam, states, n_jobs=1,
+                             steps_per_cycle=p.steps_per_cycle, max_cycles=10)
+    assert list(study.table["period"] > 0) == [True, False], study.table
+    assert study.fraction_steady == 0.5 and study.dissipation_spread == 0.0
+    assert not study.unique_dissipation

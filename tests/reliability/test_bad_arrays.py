@@ -124,6 +124,9 @@ def test_overflow_is_a_failure(two_node):
     assert "not finite" in run.message and "units" in run.message
     # a large but representable load factor is still an ordinary run
     assert sd.solve_cycles(*two_node, 1e100, max_cycles=3).status != "non_finite"
+    # a load factor whose welded reactions are not even representable is refused up front
+    with pytest.raises(sd.InputError, match="welded reactions overflow"):
+        sd.solve_cycles(two_node[0], two_node[1].scaled(1e10), 1e300)
 
 
 # ------------------------------------------------------------------ item 9: sampling error

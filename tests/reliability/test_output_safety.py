@@ -14,7 +14,7 @@ import pytest
 import shakedown as sd
 from shakedown.scenes.cli import main
 from shakedown.scenes.files import scene_from_string
-from shakedown.scenes.output import OutputFolder, check_plain_name, write_atomically
+from shakedown.scenes.output import OutputFolder
 
 SCENE = """
 [scene]
@@ -47,6 +47,8 @@ def test_scene_name_must_be_plain(name):
 
 @pytest.mark.parametrize("name", ["two-node coupled", "Kachanov_100", "été.v2"])
 def test_plain_names_pass(name):
+    from shakedown.scenes.output import check_plain_name
+
     assert check_plain_name(name) == name
 
 
@@ -73,6 +75,8 @@ def test_symlinked_output_file_is_refused(tmp_path, monkeypatch):
 
 
 def test_write_atomically_keeps_old_file_on_failure(tmp_path):
+    from shakedown.scenes.output import write_atomically
+
     target = tmp_path / "r.json"
     target.write_text("old")
 

@@ -5,8 +5,10 @@ ANSYS ``HBMAT`` converted to Matrix Market, or Code_Aster ``IMPR_MATR_ASSE``) an
 each of the ``N`` contact nodes, the index of its tangential and of its normal displacement
 DOF.
 
-Conventions (MODEL.md s.1; the same frame as :mod:`shakedown.fe.condense`)
-------------------------------------------------------------------------
+Conventions
+-----------
+MODEL.md s.1, in the frame of :mod:`shakedown.fe.condense`.
+
 For contact node ``j`` let ``u_t`` be its displacement along the tangential DOF and ``u_n``
 along the normal DOF, and ``R_t``, ``R_n`` the obstacle's reaction force on the body along the
 same DOFs.  With ``s_t = tangential_sign[j]`` and ``s_n = normal_sign[j]``:
@@ -128,6 +130,40 @@ def _signs(name, value, n):
     return s
 
 
+class _SuperLU:
+    """Plain SuperLU of ``K_ii`` (when :mod:`shakedown.fe`'s factorization is not installed)."""
+
+    def __init__(self, A):
+        self.lu = spla.splu(A)
+        pivots = np.abs(self.lu.U.diagonal())
+        if pivots.min() <= SINGULAR_RTOL * pivots.max():
+            raise RuntimeError("near singular")
+
+    def solve(self, b):
+        return self.lu.solve(np.asarray(b, dtype=float))
+
+    def schur_correction(self, B):
+        return (B.T @ self.solve(B.toarray())).astype(float)
+
+
+def _factorize(Kii, Kci, n_interior):
+    """The factor of ``K_ii``: shakedown.fe's boundary-layer-ordered LU (its Schur correction
+    needs only the factor's trailing block) when installed, else a plain SuperLU."""
+    try:
+        from ..fe.condensed import factorize
+    except ImportError:  # scikit-fem (the 'fe' extra) not installed
+        factorize = None
+    try:
+        if factorize is None:
+            return _SuperLU(Kii)
+        return factorize(Kii, "K_ii", np.unique(Kci.nonzero()[1]))
+    except (RuntimeError, InputError):
+        raise InputError(
+            f"the stiffness restricted to the {n_interior} interior DOFs is singular: the "
+            "body is not held when its contact DOFs are fixed; list its supports in "
+            "fixed_dofs") from None
+
+
 def condense_stiffness(K, tangential_dofs, normal_dofs, *, fixed_dofs=(), tangential_sign=1,
                        normal_sign=1, dof_base: int = 0, symmetry_rtol: float = 1e-8
                        ) -> CondensedStiffness:
@@ -193,20 +229,9 @@ def condense_stiffness(K, tangential_dofs, normal_dofs, *, fixed_dofs=(), tangen
     Kcc = Ks[c][:, c].toarray()
     factor = Kci = None
     if interior.size:
-        Kii = Ks[interior][:, interior].tocsc()
-        Kci = Ks[c][:, interior]
-        try:
-            factor = spla.splu(Kii)
-            pivots = np.abs(factor.U.diagonal())
-            if pivots.min() <= SINGULAR_RTOL * pivots.max():
-                raise RuntimeError("near singular")
-        except RuntimeError:
-            raise InputError(
-                f"the stiffness restricted to the {interior.size} interior DOFs is singular: the "
-                "body is not held when its contact DOFs are fixed; list its supports in "
-                "fixed_dofs") from None
-        X = factor.solve(Kci.T.toarray())
-        Kcc = Kcc - Kci @ X
+        Kci = Ks[c][:, interior].tocsr()
+        factor = _factorize(Ks[interior][:, interior].tocsc(), Kci, interior.size)
+        Kcc = Kcc - factor.schur_correction(Kci.T)
     S = 0.5 * (Kcc + Kcc.T)
     Kred = signs[:, None] * S * signs[None, :]
     return CondensedStiffness(K=Kred, contact_dofs=c, signs=signs, interior_dofs=interior,

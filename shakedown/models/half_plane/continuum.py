@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...model import InputError
+from ...model import InputError, citations
 
 
 def hertz_half_width(P, radius, e_star):
@@ -77,6 +77,7 @@ def contact_half_width(P, gap_function, e_star, a_max):
 
 def cattaneo_mindlin_ratio(Q, P, friction):
     """Stick-zone ratio ``c/a = sqrt(1 - |Q|/(f P))`` (Hertz, monotonic ``Q`` at constant ``P``)."""
+    citations.register("cattaneo1938", "mindlin1949")
     r = 1.0 - np.abs(Q) / (friction * P)
     if np.any(r < 0):
         raise InputError(f"|Q| must be <= f P for partial slip; got Q = {Q}, f P = {friction * P}")
@@ -90,6 +91,7 @@ def ellipse_construction(P0, P1, Q1, phase, friction, lam: float = 1.0):
     the tangent points of slope ``+f`` and ``-f``, i.e. the minima of ``f P - Q`` and ``f P + Q``),
     ``min_fP_minus_Q``, ``min_fP_plus_Q``, and ``gross_slip`` (``|Q| >= f P`` somewhere).
     """
+    citations.register("barber2011")
     f = float(friction)
     cP = lam * P1 * np.exp(1j * phase)
     out = {}
@@ -157,6 +159,7 @@ def shell_history(P, Q, friction):
     states : list of (edges, values)
         ``rho`` after each sample.
     """
+    citations.register("ciavarella1998", "jager1998")
     P = np.asarray(P, float)
     Q = np.asarray(Q, float)
     f = float(friction)

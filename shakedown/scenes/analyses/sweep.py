@@ -32,7 +32,7 @@ OPTIONS = {
     "n_realisations": (int, 1, "number of random crack sets"),
     "lams": ((str, list), "auto", "'auto' (from each realisation's bounds) or load factors"),
     "n_lams": (int, 12, "evenly spaced points in lam / lam2 with lams = 'auto'"),
-    "lam_span": (list, [0.5, 2.0], "range of lam / lam2 of the evenly spaced points"),
+    "lam_span": (list, [0.5, 2.5], "range of lam / lam2 of the evenly spaced points"),
     "n_band": (int, 5, "extra points inside (lam1, lam2)"),
     "n_adj": (int, 2, "extra points inside (lam_adj, lam1) when lam_adj < lam1"),
     "n_refine": (int, 2, "points added where min and max W* differ most and at lam_u"),

@@ -5,7 +5,10 @@
     rectangle: ``width``, ``height``; trapezoid: ``bottom_width``, ``top_width``, ``height``,
     ``top_offset`` (optional); both: ``nx``, ``ny`` (cells), ``pattern``; polygon:
     ``vertices`` ([[x, y], ...]), ``side_names``, ``refine``; mesh_file: ``file`` (beside
-    the scene, read by meshio) and ``boundaries`` ({name = [[x0, y0], [x1, y1]]} segments);
+    the scene, read by meshio: Gmsh ``.msh``, VTK, XDMF, ...; linear triangles or
+    quadrilaterals; the physical groups of its line elements name the boundaries that
+    ``contact``, ``dirichlet`` and the loads refer to) and ``boundaries`` ({name = [[x0, y0],
+    [x1, y1]]} segments adding names);
     ``element`` : ``"P1"`` | ``"P2"`` | ``"Q1"``;
     ``material`` : table with ``type = "isotropic"`` (``E``, ``nu``) or
     ``"transversely_isotropic"`` (``E1``, ``E2``, ``nu12``, ``nu23``, ``G12``, ``theta_deg``),
@@ -178,3 +181,18 @@ def build(model: dict, load: dict, scene_dir: Path, cache_root: Path | None = No
     except InputError as exc:
         raise SceneError(f"[model] (kind 'fe') {exc}") from None
     return system, cycle, cm
+
+
+def resolved(model: dict, load: dict) -> tuple[dict, dict]:
+    """``[model]`` and ``[load]`` with the unconditional defaults of :func:`build` filled in."""
+    m = dict(model)
+    geometry = m.setdefault("geometry", "rectangle")
+    if geometry in ("rectangle", "trapezoid"):
+        m.setdefault("element", "P1")
+        m.setdefault("pattern", "union-jack")
+    elif geometry == "polygon":
+        m.setdefault("element", "P1")
+        m.setdefault("refine", 3)
+    for key, value in (("friction", 0.0), ("mass", False), ("thickness", 1.0)):
+        m.setdefault(key, value)
+    return m, dict(load)

@@ -38,7 +38,7 @@ import numpy as np
 
 from ...model.errors import InputError, SceneError
 from ...model.loading import LoadCycle
-from ...model.system import DiscreteSystem
+from ...model.system import SYMMETRY_RTOL, DiscreteSystem
 from ...models.formats import condense_stiffness, read_load_record, read_matrix, read_vector
 from ...models.formats.readers import container_names, read_array
 
@@ -120,7 +120,9 @@ def _split(K: np.ndarray, where: str) -> dict:
         raise SceneError(f"{where}: the reduced stiffness K must be square of even size 2N "
                          f"(order v_1..v_N, w_1..w_N); got shape {K.shape}")
     n = K.shape[0] // 2
-    if not np.allclose(K[:n, n:], K[n:, :n].T, rtol=1e-8, atol=1e-8 * np.abs(K).max()):
+    # the DiscreteSystem's own symmetry tolerance (SYMMETRY_RTOL = 1e-8 of max|K|: room for
+    # matrices written with 10 significant digits), checked here to name the file
+    if not np.allclose(K[:n, n:], K[n:, :n].T, rtol=0, atol=SYMMETRY_RTOL * np.abs(K).max()):
         raise SceneError(f"{where}: K is not symmetric (its B and B^T blocks differ)")
     return {"A": K[:n, :n], "B": K[:n, n:], "C": K[n:, n:]}
 
@@ -307,3 +309,18 @@ def resolved(model: dict, load: dict) -> tuple[dict, dict]:
         ld.setdefault("n_samples", 256)
         ld.setdefault("max_error", 1e-2)
     return m, ld
+
+
+def provenance(model: dict, load: dict) -> dict:
+    """What the manifest states about the inputs: the resampling error of a load record.
+
+    ``model`` and ``load`` are the resolved tables (absolute file paths).
+    """
+    if "record_file" not in load or "period" not in load:
+        return {}
+    kw = {k: load[k] for k in ("n_samples", "t_start") if k in load}
+    try:
+        _, fit = read_load_record(load["record_file"], load["period"], max_error=float("inf"), **kw)
+    except InputError:
+        return {}  # the build reports it
+    return {"load_record": fit.message(), "load_record_relative_error": fit.relative_error}
