@@ -85,7 +85,12 @@ MUTATIONS = [
     M("S4", "steps", "shakedown/evolution/active_set.py",
       "cand[:, FORWARD] = np.where(isS & allowed[:, FORWARD], -sp / ft, -np.inf)",
       "cand[:, FORWARD] = np.where(isS & allowed[:, FORWARD], -sm / ft, -np.inf)",
-      T_STEP, "stick node violating the forward cone switched by the backward test"),
+      T_STEP + " " + T_EVO,
+      "rate problems (events): stick node violating the forward cone switched by the backward test"),
+    M("S11", "steps", "shakedown/evolution/active_set.py",
+      "np.add(fp, q, out=cand[FORWARD])",
+      "np.subtract(fp, q, out=cand[FORWARD])",
+      T_STEP, "step problems: stick node violating the forward cone switched by the backward test"),
     M("S5", "steps", "shakedown/evolution/active_set.py",
       "xs = (w / ds[n:], np.maximum(dv, 0) / ds[:n], np.maximum(-dv, 0) / ds[:n])",
       "xs = (w / ds[n:], np.maximum(dv, 0) / ds[:n], np.maximum(dv, 0) / ds[:n])",
@@ -257,7 +262,7 @@ MUTATIONS = [
       "comp = float(np.abs(x * y).max() / norm)",
       "comp = 0.0",
       T_STAB, "eigen-answer verification ignores complementarity",
-      equivalent="with x scaled to max x = 1, complementarity max_j x_j |y_j| / norm is at "
+      equivalent="with x scaled to max x = 1, complementarity max_j x_j abs(y_j) / norm is at "
                  "most max(residual on the support, SUPPORT_RTOL = 1e-9 off it) < VERIFY_TOL = "
                  "1e-8: implied by the other two checks"),
     M("T4", "stability", "shakedown/stability/result.py",

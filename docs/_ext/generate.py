@@ -104,6 +104,10 @@ def benchmark_tables(folder: Path, path: Path) -> None:
 def notebooks(source: Path, target: Path, executed_dirs) -> None:
     """Copy each notebook into the docs, preferring an executed copy (with its figures)."""
     target.mkdir(parents=True, exist_ok=True)
+    names = {nb.name for nb in source.glob("*.ipynb")}
+    for stale in target.glob("*.ipynb"):  # a notebook removed from notebooks/ leaves the docs
+        if stale.name not in names:
+            stale.unlink()
     for nb in sorted(source.glob("*.ipynb")):
         chosen = nb
         for d in executed_dirs:

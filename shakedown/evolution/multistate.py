@@ -35,7 +35,7 @@ def _state_change(D, F, v1, w1, v0, w0):
     return float(np.max(D[:n] * np.abs(v1 - v0) + D[n:] * np.abs(w1 - w0), initial=0.0) / F)
 
 
-def solve_many(solver, V, q_w, p_w, guesses, Q0, P0):
+def solve_many(solver, V, q_w, p_w, guesses, Q0, P0, bases=None):
     """One implicit step of several states with shared welded reactions.
 
     Parameters
@@ -49,6 +49,9 @@ def solve_many(solver, V, q_w, p_w, guesses, Q0, P0):
         Each state's guess (its previous ``active_set``).
     Q0, P0 : ndarray, shape (k, N)
         ``q_w + A v``, ``p_w + B^T v`` of each state [force].
+    bases : list, optional
+        Each state's own base factor of the low-rank updates (updated in place): states on
+        different paths then do not take each other's factor as the base of their updates.
 
     Returns
     -------
@@ -67,17 +70,27 @@ def solve_many(solver, V, q_w, p_w, guesses, Q0, P0):
             groups.setdefault(guesses[i].tobytes(), []).append(i)
         for key, idx in groups.items():
             if len(idx) > 1:  # a single state: the plain step is as cheap
-                _group(solver, key, np.array(idx), V, q_w, p_w, guesses, Q0, P0, scales,
-                       out)
+                F = _group(solver, key, np.array(idx), V, q_w, p_w, guesses, Q0, P0, scales,
+                           out)
+                if bases is not None and F is not None:
+                    for i in idx:
+                        if out[i] is not None:
+                            bases[i] = F
     for i in range(k):
         if out[i] is None:
+            if bases is not None:
+                solver._base = bases[i]
             out[i] = solver.solve(V[i], q_w, p_w, guesses[i], base=(Q0[i], P0[i]),
                                   verify=False)
+            if bases is not None:
+                bases[i] = solver._base
     return out
 
 
 def _group(solver, key, idx, V, q_w, p_w, guesses, Q0, P0, scales, out):
-    """Solve the states ``idx`` (same guess ``key``) on its cached factor; fill ``out``."""
+    """Solve the states ``idx`` (same guess ``key``) on its cached factor; fill ``out``.
+
+    Returns the factor used (None for the all-stick guess or when not cached)."""
     n = solver.n
     s = guesses[idx[0]]
     g = idx.size
@@ -99,6 +112,7 @@ def _group(solver, key, idx, V, q_w, p_w, guesses, Q0, P0, scales, out):
         solver._base = F
         hits = 1
     else:
+        F = None
         q, p = q0.copy(), p0.copy()
         hits = 0
     ft = solver.feas_tol * scales[idx]
@@ -132,6 +146,7 @@ def _group(solver, key, idx, V, q_w, p_w, guesses, Q0, P0, scales, out):
             complementarity_residual=float(comp[a]), equilibrium_residual=float("nan"),
             force_scale=float(scales[i]), method="active_set", iterations=1,
             cache_hits=hits)
+    return F
 
 
 def _check_period(solver, c, V, Wg, Q, P, qw, pw, scales, worst):
@@ -162,6 +177,7 @@ class _Track:
         self.W_list, self.change, self.records = [], [], []
         self.history = None
         self.period = 0
+        self.base = None  # the base factor of this state's low-rank updates
 
     @property
     def running(self):
@@ -190,8 +206,11 @@ def _implicit_cycles(solver, c, tracks, qw, pw, load, lam):
     alive = np.arange(k)
     fail = {}
     for j in range(n_steps):
+        bases = [tracks[i].base for i in alive]
         res = solve_many(solver, V[alive, j], qw[j], pw[j], guesses[alive], Q0[alive],
-                         P0[alive])
+                         P0[alive], bases)
+        for i, b in zip(alive, bases, strict=True):
+            tracks[i].base = b
         keep = []
         for a, (i, r) in enumerate(zip(alive, res, strict=True)):
             tracks[i].statuses[r.status] = tracks[i].statuses.get(r.status, 0) + 1

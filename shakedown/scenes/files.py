@@ -265,9 +265,20 @@ def validate_options(label: str, name: str, opts) -> dict:
 
 
 def resolved_analyses(scene: Scene, names: list[str]) -> dict:
-    """``{name: options}`` of the analyses ``names`` as they run (every option filled)."""
-    return {name: scene.analyses.get(name) or validate_options(scene.label, name, {})
-            for name in names}
+    """``{name: options}`` of the analyses ``names`` as they run (every option filled).
+
+    Options an analysis lists in ``WHERE_IT_RUNS`` (e.g. the sweep's Dask ``scheduler``) choose
+    where the work runs, not its result; they are reset to their defaults here, so that the
+    resolved scene reruns anywhere (the command line in the manifest still records them).
+    """
+    out = {}
+    for name in names:
+        opts = dict(scene.analyses.get(name) or validate_options(scene.label, name, {}))
+        module = analysis_module(name, scene.label)
+        for key in getattr(module, "WHERE_IT_RUNS", ()):
+            opts[key] = module.OPTIONS[key][1]
+        out[name] = opts
+    return out
 
 
 def check_type(label, table, key, value, typ, help_=""):

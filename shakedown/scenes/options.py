@@ -90,7 +90,6 @@ def apply_overrides(scene, names, overrides):
         more dots, e.g. ``model.material.E``).
     """
     import copy
-    from dataclasses import replace
 
     raw = copy.deepcopy(scene.raw)
     for item in overrides:
@@ -127,12 +126,13 @@ def apply_overrides(scene, names, overrides):
         msg = str(exc)
         msg = msg.replace(scene.label, label, 1) if scene.label in msg else f"{label}: {msg}"
         raise SceneError(msg) from None
-    # ``raw`` stays what the *file* says (the sweep refuses a Dask scheduler named in a file but
-    # takes one from --set), except the [scene] table, whose units the verdicts read
-    file_raw = copy.deepcopy(scene.raw)
-    if "scene" in raw:
-        file_raw["scene"] = raw["scene"]
-    return replace(new, raw=file_raw)
+    # options that choose where a run executes (the sweep's Dask scheduler) are trusted only
+    # from the command line: keep them out of the scene's raw tables, which are what a scene
+    # file said (and what the analysis checks for such keys)
+    for name, table in new.raw.get("analyses", {}).items():
+        for key in getattr(analysis_module(name, label), "WHERE_IT_RUNS", ()):
+            table.pop(key, None)
+    return new
 
 
 #: Markers around the generated option tables in README.md.

@@ -270,3 +270,24 @@ def test_lemke_fallbacks_are_scale_free(sK, sF):
         tol = np.concatenate([slip_tol(s, scale) * np.ones(n), slip_tol(s, scale) * np.ones(n)])
         np.testing.assert_array_less(np.abs(b.z * sK / sF - a.z), tol)
         np.testing.assert_array_less(np.abs(a.z - ref.z), tol)
+
+
+def test_critical_friction_once_per_system(monkeypatch):
+    """Solvers and runs of one system share one critical-friction computation; another
+    friction (a new frozen system) gets its own."""
+    rng = np.random.default_rng(7)
+    s = coupled(rng, 5)
+    load = harmonic_load(rng, s)
+    calls = []
+    real = sd.DiscreteSystem._critical_friction
+    monkeypatch.setattr(sd.DiscreteSystem, "_critical_friction",
+                        lambda self, k: (calls.append(k), real(self, k))[1])
+    first = s.critical_friction()
+    for _ in range(3):
+        sd.solve_cycles(s, load, 1.0, steps_per_cycle=8, max_cycles=2)
+    sd.solve_cycles(s, load, 1.0, initial_slip=np.zeros((2, 5)), steps_per_cycle=8,
+                    max_cycles=2)
+    assert s.critical_friction() is first and len(calls) == 1
+    s2 = s.with_friction(0.5 * s.friction)
+    assert s2.critical_friction().factor == pytest.approx(2 * first.factor, rel=1e-12)
+    assert len(calls) == 2

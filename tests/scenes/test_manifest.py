@@ -112,6 +112,19 @@ def test_resolved_scene_reproduces_a_run_bit_for_bit(tmp_path):
     assert json.loads((again / "bounds.json").read_text())["safe_lam"] == 0.3
 
 
+def test_resolved_scene_leaves_out_where_the_sweep_ran():
+    """A Dask scheduler given with --set is not written into the resolved scene (a scene file
+    naming one is refused), so the rerun is possible; results do not depend on it."""
+    from dataclasses import replace
+
+    from shakedown.scenes.files import load_scene, resolved_analyses
+
+    scene = load_scene()
+    opts = dict(scene.analyses["sweep"], scheduler="tcp://127.0.0.1:8786")
+    scene = replace(scene, analyses={**scene.analyses, "sweep": opts})
+    assert resolved_analyses(scene, ["sweep"])["sweep"]["scheduler"] == ""
+
+
 def test_manifest_refuses_a_changed_input_file(tmp_path, capsys):
     (tmp_path / "scenes").mkdir()
     shutil.copytree(ROOT / "data" / "models", tmp_path / "models",

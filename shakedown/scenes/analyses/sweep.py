@@ -28,6 +28,9 @@ from __future__ import annotations
 
 import shutil
 
+#: Options that choose where the sweep runs, not its result (reset in scene.resolved.toml).
+WHERE_IT_RUNS = ("scheduler",)
+
 OPTIONS = {
     "n_realisations": (int, 1, "number of random crack sets"),
     "lams": ((str, list), "auto", "'auto' (from each realisation's bounds) or load factors"),
