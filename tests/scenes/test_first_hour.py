@@ -150,6 +150,12 @@ def test_set_reaches_model_and_load_keys(tmp_path):
     assert changed.model["friction"] == 0.4 and changed.load["q0"] == [0.2, -0.1]
     assert changed.analyses["bounds"]["lam"] == 0.1
     assert scene.model["friction"] == 0.7  # the original scene is untouched
+    # a Dask scheduler from --set is not mistaken for one named in the file (refused there)
+    dask = apply_overrides(load_scene(None), ["sweep"], ['sweep.scheduler="tcp://h:1"'])
+    assert dask.analyses["sweep"]["scheduler"] == "tcp://h:1"
+    assert "scheduler" not in dask.raw.get("analyses", {}).get("sweep", {})
+    units = apply_overrides(scene, ["bounds"], ['scene.force_unit="N"', 'scene.length_unit="mm"'])
+    assert units.units["energy"] == "N mm"
     # the answer is that of the system built by hand with the new values (cross-check)
     assert main(["bounds", "two_node_coupled", "-q", "-o", str(tmp_path),
                  "--set", "model.friction=0.4"]) == 0
