@@ -129,6 +129,12 @@ def bounds_verdict(b, adjacency: bool = False) -> str:
             f"{first}from some initial states only for {fmt(lam1)} < lam < lam2 = {fmt(lam2)} "
             "(there the initial state decides); never above lam2 (cyclic slip from every "
             "initial state).")
+        if np.isnan(lam_adj) and n >= 3 and lam1 > 0:
+            out.append(
+                "lam_adj was not computed (shakedown_bounds(..., adjacency=True)): in coupled "
+                "systems with three or more nodes some initial states were seen to slip "
+                "cyclically between lam_adj and lam1 (README 'Findings'), so shakedown from "
+                "every initial state is certain only below lam_adj.")
     k = int(b.limiting_constraint)
     if lam1 == 0 and k >= 0:
         out.append(

@@ -43,7 +43,7 @@ def test_single_node_melan_reference(f, p0, q0, amp):
 
 
 def test_coupled_two_nodes_states_the_band_where_the_initial_state_decides():
-    b = sd.shakedown_bounds(*coupled())
+    b = sd.shakedown_bounds(*coupled(), adjacency=True)
     v = b.verdict()
     first = f"Shakes down from every initial state for lam < lam1 = {fmt(b.lam1)}"
     band = f"from some initial states only for {fmt(b.lam1)} < lam < lam2 = {fmt(b.lam2)}"
@@ -56,7 +56,7 @@ def test_coupled_two_nodes_states_the_band_where_the_initial_state_decides():
 
 def test_lam_adj_below_lam1_weakens_the_claim():
     p = sd.gallery.get("three_node_below_lam1")
-    b = sd.shakedown_bounds(p.system, p.load)
+    b = sd.shakedown_bounds(p.system, p.load, adjacency=True)
     assert b.lam_adj < b.lam1
     v = bounds_verdict(b, adjacency=True)
     # no longer claims "every initial state" up to lam1
@@ -80,8 +80,16 @@ def test_static_load_says_why_lam2_is_infinite():
 
 def test_lam_adj_inf_is_explained_only_when_it_was_computed():
     b = sd.shakedown_bounds(*coupled(), adjacency=False)
-    assert np.isinf(b.lam_adj)
-    assert "lam_adj" not in bounds_verdict(b, adjacency=False)
+    assert np.isnan(b.lam_adj)  # not computed
+    assert "lam_adj" not in bounds_verdict(b, adjacency=False)  # two nodes: nothing to add
+
+
+def test_uncomputed_lam_adj_is_a_caution_for_three_coupled_nodes():
+    # the 3-node system of README 'Findings' (cyclic slip between lam_adj and lam1): without
+    # lam_adj the verdict must not claim more than is proven
+    p = sd.gallery.get("three_node_below_lam1")
+    v = sd.shakedown_bounds(p.system, p.load).verdict()
+    assert "lam_adj was not computed" in v and "certain only below lam_adj" in v
 
 
 @settings(max_examples=20, deadline=None)
