@@ -27,6 +27,7 @@ from __future__ import annotations
 import re
 
 from .errors import InputError
+from .version import __version__
 
 #: The package itself: always cited (see ``CITATION.cff``).
 PACKAGE_KEY = "shakedown"
@@ -38,7 +39,7 @@ REFERENCES: dict[str, str] = {
            with Coulomb friction},
   author = {{The shakedown developers}},
   year = {2026},
-  version = {0.1.0},
+  version = {""" + __version__ + """},
   note = {Python package; see CITATION.cff}
 }""",
     "melan1936": """@article{melan1936,

@@ -3,4 +3,4 @@
 Keep equal to ``version`` in ``pyproject.toml`` (``tests/scenes/test_manifest.py`` checks it).
 """
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"
