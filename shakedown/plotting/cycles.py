@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..model.errors import InputError
+from .axes import _new_ax, _plt, _unit
 from .trajectory import plot_trajectory
 
 __all__ = [
@@ -36,18 +37,6 @@ _STATE_COLOURS = {
 }
 
 
-def _plt():
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def _new_ax(ax, **kw):
-    if ax is None:
-        fig, ax = _plt().subplots(**kw)
-    return ax
-
-
 def _dissipation_array(run):
     W = getattr(run, "dissipation", run)
     try:
@@ -60,14 +49,6 @@ def _dissipation_array(run):
     if W.ndim != 1:
         raise InputError(f"W per cycle must be 1-D; got shape {W.shape}")
     return W
-
-
-#: Placeholder units when a scene declares none (``[scene] force_unit``, ``length_unit``).
-UNITS = {"force": "[force]", "length": "[length]", "energy": "[force x length]"}
-
-
-def _unit(units, key):
-    return (units or {}).get(key, UNITS[key])
 
 
 def plot_dissipation(run, ax=None, *, log: bool = False, relative: bool = False, units=None,

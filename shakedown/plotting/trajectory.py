@@ -6,25 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..model.errors import InputError
-
-#: Placeholder units when a scene declares none.
-UNITS = {"force": "[force]", "length": "[length]"}
-
-
-def _unit(units, key):
-    return (units or {}).get(key, UNITS[key])
-
-
-def _plt():
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def _new_ax(ax, **kw):
-    if ax is None:
-        fig, ax = _plt().subplots(**kw)
-    return ax
+from .axes import _new_ax, _plt, _unit
 
 
 def _lines(system, load, lam, times):
