@@ -70,11 +70,17 @@ class Fallbacks:
         dtol = self.feas_tol * scale / self.diag
         s = kinematic_states(z[:n], z[n:], dtol)
         # re-solve with the assignment (clean answer, cached factors) when it verifies
-        z2 = self._solve_set(s, q0, p0, scale)
-        if z2 is not None:
-            q2, p2 = self._reactions(z2, q0, p0)
-            if self.residuals(z2, q2, p2, allowed, forced, scale) <= self.feas_tol:
-                z = z2
+        return self._lemke_answer(s, z, q0, p0, allowed, forced, scale, res, clean=True)
+
+    def _lemke_answer(self, s, z, q0, p0, allowed, forced, scale, res, *, clean) -> MixedSolution:
+        """A Lemke answer ``z`` with states ``s``: replaced by the solve of assignment ``s`` on
+        the cached factors when that verifies (``clean``), then verified itself."""
+        if clean:
+            z2 = self._solve_set(s, q0, p0, scale)
+            if z2 is not None:
+                q2, p2 = self._reactions(z2, q0, p0)
+                if self.residuals(z2, q2, p2, allowed, forced, scale) <= self.feas_tol:
+                    z = z2
         q, p = self._reactions(z, q0, p0)
         ok = res.success and self.residuals(z, q, p, allowed, forced, scale) <= 10 * self.feas_tol
         return MixedSolution(s, z, q, p, bool(ok), "lemke", 0, res.pivots, self._counters)
@@ -157,16 +163,8 @@ class Fallbacks:
         z[acols] = za
         if o.size:
             z[ocols] = -(X[:, -1] + X[:, :-1] @ za)
-        ok = res.success
-        if ok:  # re-solve with the assignment read off the basis (clean answer, cached factors)
-            z2 = self._solve_set(s, q0, p0, scale)
-            if z2 is not None:
-                q2, p2 = self._reactions(z2, q0, p0)
-                if self.residuals(z2, q2, p2, allowed, forced, scale) <= self.feas_tol:
-                    z = z2
-        q, p = self._reactions(z, q0, p0)
-        ok = ok and self.residuals(z, q, p, allowed, forced, scale) <= 10 * self.feas_tol
-        return MixedSolution(s, z, q, p, bool(ok), "lemke", 0, res.pivots, self._counters)
+        return self._lemke_answer(s, z, q0, p0, allowed, forced, scale, res,
+                                  clean=res.success)
 
     def enumerate_solutions(self, q0, p0, scale):
         """Every solution of the step problem, by trying all ``4^N`` assignments."""
