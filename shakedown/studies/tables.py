@@ -23,6 +23,7 @@ killed writer's lock never blocks the next run) so that two processes never writ
 
 from __future__ import annotations
 
+import abc
 import contextlib
 import csv
 import io
@@ -40,7 +41,7 @@ __all__ = ["KEY", "ParquetStore", "CsvStore", "open_store"]
 KEY = "task_key"
 
 
-class _Store:
+class _Store(abc.ABC):
     """Common interface: ``keys()``, ``append(rows)``, ``read()``, context manager (lock)."""
 
     format = ""
@@ -49,8 +50,9 @@ class _Store:
         self.path = refuse_link(path, "store")
         self._lock = None
 
-    def _lock_path(self) -> Path:  # pragma: no cover - overridden
-        raise NotImplementedError
+    @abc.abstractmethod
+    def _lock_path(self) -> Path:
+        """The lock file of this store."""
 
     def __enter__(self):
         from filelock import FileLock, Timeout
@@ -72,8 +74,9 @@ class _Store:
             with contextlib.suppress(OSError):
                 tmp.unlink()
 
-    def _folder(self) -> Path:  # pragma: no cover - overridden
-        raise NotImplementedError
+    @abc.abstractmethod
+    def _folder(self) -> Path:
+        """The folder holding the store's files (and the debris of interrupted writes)."""
 
     def __exit__(self, *exc):
         if self._lock is not None:
