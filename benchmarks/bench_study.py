@@ -1,7 +1,7 @@
 """Benchmarks of the study (issue 13): per-run cost against today's code, the publication-size
 study on 2 cores and on a Dask cluster of separate processes, the default `shakedown run`.
 
-    python benchmarks/bench_study.py --only per_run   # side by side with the baseline commit
+    python benchmarks/bench_study.py --only per_run [--prev /tmp/prev-b450]   # vs the baseline
     python benchmarks/bench_study.py --only study     # 20 realisations x 24 lam x 16 states
     python benchmarks/bench_study.py --only dask      # the same rows on `dask scheduler/worker`
     python benchmarks/bench_study.py --only default   # `shakedown run` (the default job)
@@ -48,8 +48,15 @@ PER_RUN = textwrap.dedent("""
     states = [initial_slip(s, load, j, (2024, 0, 1)) for j in range({n})]
     opts = dict(method="implicit", steps_per_cycle=64, max_cycles=200, tol=1e-10)
     new = {new}
+    warm = 0.0
     if new:
         from shakedown.evolution.complementarity import StepSolver
+        import shakedown as sd
+        t0 = time.perf_counter()  # one-time cost per process: load (or compile) the kernel
+        sd.solve_cycles(sd.DiscreteSystem([[1.0]], [[0.0]], [[1.0]], friction=0.5),
+                        sd.LoadCycle.from_harmonics([0.0], [1.0], q_cos=[1.0]), 1.0,
+                        steps_per_cycle=4)
+        warm = time.perf_counter() - t0
     t0 = time.perf_counter()
     W = []
     for x in {xs}:
@@ -57,7 +64,7 @@ PER_RUN = textwrap.dedent("""
         for v in states:
             kw = dict(step_solver=solver) if new else dict()
             W.append(run_row(s, load, x * b.lam2, v, opts, **kw)["W"])
-    print(json.dumps(dict(seconds=time.perf_counter() - t0, runs=len(W), W=W)))
+    print(json.dumps(dict(seconds=time.perf_counter() - t0, runs=len(W), W=W, warm=warm)))
 """)
 
 
@@ -75,26 +82,34 @@ def load() -> str:
         "/proc/loadavg").exists() else "n/a"
 
 
-def bench_per_run(base: str, repeat: int) -> list[str]:
+def bench_per_run(base: str, repeat: int, prev: str | None = None) -> list[str]:
+    """Seconds per run: the baseline (``base``, no step solver reuse), optionally the previous
+    state of this code (``prev``), and this code, alternating, each in a fresh subprocess."""
     lines = [f"load average before: {load()}"]
-    t = {"base": [], "new": []}
+    variants = [("base", base, False)] + ([("prev", prev, True)] if prev else []) + [
+        ("new", str(ROOT), True)]
+    t = {name: [] for name, *_ in variants}
+    warm = {name: [] for name, *_ in variants}
     W = {}
     for _ in range(repeat):
-        for name, path, new in (("base", base, False), ("new", str(ROOT), True)):
+        for name, path, new in variants:
             r = _run(PER_RUN.format(spec=SPEC, n=N_STATES, new=new, xs=XS), path)
             t[name].append(r["seconds"] / r["runs"])
+            warm[name].append(r.get("warm", 0.0))
             W[name] = r["W"]
     import numpy as np
 
-    a, b = np.array(W["base"]), np.array(W["new"])
-    diff = float(np.max(np.abs(a - b) / np.maximum(np.abs(a), 1e-300)))
-    mb, mn = statistics.median(t["base"]), statistics.median(t["new"])
-    lines += [f"runs per repeat: {len(XS) * N_STATES} (lam/lam2 in {XS}, {N_STATES} states)",
-              f"baseline s/run: {[round(x, 4) for x in t['base']]} median {mb:.4f}",
-              f"new s/run:      {[round(x, 4) for x in t['new']]} median {mn:.4f}",
-              f"ratio baseline/new: {mb / mn:.2f}",
-              f"max relative difference of steady W, baseline vs new: {diff:.2e}",
-              f"load average after: {load()}"]
+    a = np.array(W["base"])
+    lines.append(f"runs per repeat: {len(XS) * N_STATES} (lam/lam2 in {XS}, {N_STATES} states)")
+    mb = statistics.median(t["base"])
+    for name, *_ in variants:
+        m = statistics.median(t[name])
+        d = float(np.max(np.abs(np.array(W[name]) - a) / np.maximum(np.abs(a), 1e-300)))
+        lines.append(f"{name:4s} s/run: {[round(x, 4) for x in t[name]]} median {m:.4f}; "
+                     f"baseline/{name} {mb / m:.2f}x; max rel. difference of W vs baseline "
+                     f"{d:.1e}; one-time kernel load per process (untimed) "
+                     f"{statistics.median(warm[name]):.2f} s")
+    lines.append(f"load average after: {load()}")
     return lines
 
 
@@ -194,6 +209,8 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--only", choices=["per_run", "study", "dask", "default"], action="append")
     ap.add_argument("--base", default="/tmp/study-base")
+    ap.add_argument("--prev", default=None,
+                    help="a checkout of the previous code to compare as well (per_run)")
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--realisations", type=int, default=20)
     args = ap.parse_args(argv)
@@ -202,7 +219,7 @@ def main(argv=None):
         for part in parts:
             print(f"## {part}", flush=True)
             if part == "per_run":
-                lines = bench_per_run(args.base, args.repeat)
+                lines = bench_per_run(args.base, args.repeat, args.prev)
             elif part == "study":
                 lines = bench_study(args.realisations, Path(tmp))
             elif part == "dask":

@@ -101,13 +101,18 @@ class StepSolver(FactorCache, ActiveSet, Fallbacks):
         by enumerating all ``4^N`` state assignments.
     check_uniqueness : bool
         Compute ``system.critical_friction()`` (once) to certify uniqueness.
+    kernel : bool
+        Let :func:`~shakedown.solve_cycles` march whole periods in the compiled kernel of
+        :mod:`.kernel` (numba), handing back to :meth:`solve` only the steps it cannot finish
+        (``False``: every step by :meth:`solve`; same answers to the solver tolerance).
     """
 
     def __init__(self, system: DiscreteSystem, *, feas_tol: float = FEAS_TOL,
                  max_iter: int | None = None, cache_bytes: float = 256e6,
                  max_update_rank: int = 6, update_fraction: float = 0.125,
                  update_min_size: int = 256,
-                 enumerate_max_nodes: int = 4, check_uniqueness: bool = True):
+                 enumerate_max_nodes: int = 4, check_uniqueness: bool = True,
+                 kernel: bool = True):
         if not isinstance(system, DiscreteSystem):
             raise InputError(f"system must be a DiscreteSystem; got {type(system).__name__}")
         if not (np.isfinite(feas_tol) and 0 < feas_tol < 1):
@@ -134,6 +139,7 @@ class StepSolver(FactorCache, ActiveSet, Fallbacks):
         self.update_min_size = int(update_min_size)
         self.enumerate_max_nodes = int(enumerate_max_nodes)
         self.check_uniqueness = bool(check_uniqueness)
+        self.kernel = bool(kernel)
         self._cache: OrderedDict[bytes, _Factor] = OrderedDict()
         self._cache_used = 0
         self._base: _Factor | None = None
@@ -146,6 +152,12 @@ class StepSolver(FactorCache, ActiveSet, Fallbacks):
     def critical(self):
         """``system.critical_friction()`` (computed once)."""
         return self.system.critical_friction()
+
+    @cached_property
+    def kernel_cache(self):
+        """The compiled kernel's cache of assignment inverses (:mod:`.fast_period`)."""
+        from .fast_period import KernelCache
+        return KernelCache(self.n, self.cache_bytes, self.max_iter)
 
     @property
     def well_posed(self) -> bool | None:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -99,6 +100,8 @@ class CycleRun:
     cycle_start_slips, cycle_start_gaps : ndarray, shape (n_cycles + 1, N)
         State at ``t = 0, 1, ..., n_cycles`` (row 0: the initial state; events: after the
         equilibrium jump at ``t = 0``).
+    steady_orbit : tuple of CycleRecord
+        The records behind ``steady_table`` (internal; arrays per period).
     steady_table : pandas.DataFrame
         The steady orbit's time series, one row per (time, node): ``cycle``, ``t`` (absolute,
         cycles), ``node``, ``slip``, ``gap``, ``q``, ``p``, ``state`` (:data:`STATE_NAMES`, of the
@@ -149,7 +152,7 @@ class CycleRun:
     final_gap: np.ndarray
     cycle_start_slips: np.ndarray
     cycle_start_gaps: np.ndarray
-    steady_table: object
+    steady_orbit: tuple = field(repr=False)
     energy_identity: EnergyIdentity | None
     status: str
     message: str
@@ -167,10 +170,29 @@ class CycleRun:
     sampling_error: float = 0.0
     within_sampling_error: bool = False
 
+    @cached_property
+    def steady_table(self):
+        """The steady orbit's time series as a DataFrame (built on first access from
+        ``steady_orbit``; see the class docstring)."""
+        return _table(self.steady_orbit)
+
     @property
     def success(self) -> bool:
         """A steady orbit was reached."""
         return self.status == "periodic"
+
+
+def orbit_arrays(records):
+    """``(v, w, states)`` of the orbit's points, shape (points, N): the first record whole,
+    the later ones without their first row (it repeats the previous record's last)."""
+    take = [(r if i == 0 else _Tail(r)) for i, r in enumerate(records)]
+    return (np.concatenate([r.v for r in take]), np.concatenate([r.w for r in take]),
+            np.concatenate([r.states for r in take]))
+
+
+class _Tail:
+    def __init__(self, rec):
+        self.v, self.w, self.states = rec.v[1:], rec.w[1:], rec.states[1:]
 
 
 def _table(records):
@@ -279,7 +301,7 @@ def _finish(system, solver, load, lam, method, n_steps, tol, F, dtol, records, h
         final_gap=np.asarray(w, float).copy(),
         cycle_start_slips=np.asarray(starts_v),
         cycle_start_gaps=np.asarray(starts_w),
-        steady_table=_table(orbit) if orbit else _table([]),
+        steady_orbit=tuple(orbit),
         energy_identity=energy,
         status=status,
         message=note + msg,

@@ -24,6 +24,7 @@ import time
 
 import numpy as np
 
+from . import fast_period
 from .cycle_results import _finish
 from .events import CycleRecord, EventIntegrator
 from .sampling import trust
@@ -205,7 +206,17 @@ def _implicit_cycles(solver, c, tracks, qw, pw, load, lam):
     worst = np.zeros(k)
     alive = np.arange(k)
     fail = {}
-    for j in range(n_steps):
+    if fast_period.usable(solver):  # each state's period by the compiled kernel
+        res = np.zeros(n_steps)
+        for i, tr in enumerate(tracks):
+            Wd[i], guesses[i], failed = fast_period.run_period(
+                solver, qw, pw, V[i, 0], guesses[i], V[i], Wg[i], Q[i], P[i], st[i], act[i],
+                scales[i], res, tr.statuses)
+            worst[i] = max(worst[i], float(res.max()))
+            if failed is not None:
+                fail[i] = failed
+        alive = alive[:0]
+    for j in range(n_steps if alive.size else 0):
         bases = [tracks[i].base for i in alive]
         res = solve_many(solver, V[alive, j], qw[j], pw[j], guesses[alive], Q0[alive],
                          P0[alive], bases)

@@ -86,9 +86,8 @@ def run_row(system, load, lam: float, slip, solver: dict, *, step_solver=None) -
 
 def row_of_run(system, run) -> dict:
     """The row of :func:`run_row` for a finished :class:`~shakedown.CycleRun`."""
-    from ..evolution.complementarity import FEAS_TOL, STATE_NAMES
+    from ..evolution.complementarity import FEAS_TOL, SEPARATED
 
-    n = system.n_nodes
     row = dict(W=float(run.steady_dissipation), cycles_to_steady=int(run.cycles_to_steady),
                n_cycles=int(run.n_cycles), period=int(run.period),
                shook_down=bool(run.shook_down), frac_slip=np.nan, frac_open=np.nan,
@@ -96,15 +95,13 @@ def row_of_run(system, run) -> dict:
     if run.period > 0:
         # slip: the node's slip moves over the orbit by more than the solver's own zero
         # (FEAS_TOL * force_scale / A_jj, as in CycleRun.shook_down); open: a separated step
-        tab = run.steady_table.sort_values(["node", "t"], kind="stable")
-        node = tab["node"].to_numpy(int)
-        travel = np.zeros(n)
-        np.add.at(travel, node[1:], np.where(node[1:] == node[:-1],
-                                             np.abs(np.diff(tab["slip"].to_numpy(float))), 0.0))
+        from ..evolution.cycle_results import orbit_arrays
+
+        v, _, states = orbit_arrays(run.steady_orbit)
+        travel = np.abs(np.diff(v, axis=0)).sum(axis=0)
         zero = FEAS_TOL * float(run.force_scale) / np.diag(system.A)
         slips = travel > zero
-        opens = np.zeros(n, bool)
-        opens[node[(tab["state"].astype(str) == STATE_NAMES[3]).to_numpy()]] = True
+        opens = np.any(states == SEPARATED, axis=0)
         row.update(frac_slip=slips.mean(), frac_open=opens.mean(),
                    frac_active=(slips | opens).mean())
     return row

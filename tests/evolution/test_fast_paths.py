@@ -110,7 +110,8 @@ def test_woodbury_updates_equal_refactorisation(seed, rank):
 def test_batched_states_equal_independent_runs(seed, monkeypatch):
     """Several initial states run together give the steady W, stuck nodes and final states of
     independent runs, to the solver tolerance; duplicated states go through the shared
-    multi-right-hand-side path (counted)."""
+    multi-right-hand-side path of the Python step (counted; the compiled kernel, tested in
+    test_kernel.py, is switched off here)."""
     calls = []
     real = multistate._group
     monkeypatch.setattr(multistate, "_group",
@@ -123,10 +124,12 @@ def test_batched_states_equal_independent_runs(seed, monkeypatch):
     V0 = np.vstack([V0, V0[1]])  # a duplicate: shares every active set with state 1
     kw = dict(steps_per_cycle=24, tol=1e-10)
     for lam in (0.5, 1.5):
-        batch = sd.solve_cycles(s, load, lam, initial_slip=V0, **kw)
+        batch = sd.solve_cycles(s, load, lam, initial_slip=V0,
+                                solver=StepSolver(s, kernel=False), **kw)
         assert isinstance(batch, list) and len(batch) == len(V0)
         for v0, b in zip(V0, batch, strict=True):
-            ind = sd.solve_cycles(s, load, lam, initial_slip=v0, **kw)
+            ind = sd.solve_cycles(s, load, lam, initial_slip=v0,
+                                  solver=StepSolver(s, kernel=False), **kw)
             assert b.status == ind.status == "periodic"
             # W is a sum of N * steps products of forces and slips each exact to ~1e-13
             # relative: 1e-9 relative to the dissipation scale F^2 / K is far above that

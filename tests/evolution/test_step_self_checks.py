@@ -154,7 +154,7 @@ def test_energy_identity_flags_wrong_steps(wrong):
     good = sd.solve_cycles(s, load, 0.9, **kw)
     assert good.status == "periodic" and good.steady_dissipation > 0
     assert good.energy_identity.discrete_relative_difference <= 1e-12
-    bad = sd.solve_cycles(s, load, 0.9, solver=wrong(s), **kw)
+    bad = sd.solve_cycles(s, load, 0.9, solver=wrong(s, kernel=False), **kw)  # Python steps
     # Two self-checks guard the steps: the equilibrium of every period recomputed with K
     # (wrong reactions stop the run) and the discrete energy balance (wrong slips keep the
     # equilibrium but break the balance).  One of them must object.

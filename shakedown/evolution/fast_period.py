@@ -1,0 +1,105 @@
+"""One load period of one state by the compiled kernel (:mod:`.kernel`), with the Python step
+(:meth:`StepSolver.solve`) for the steps the kernel hands back (issue 13/14; MODEL.md s.4).
+
+:class:`KernelCache` is the kernel's bounded cache of assignment inverses, kept with the
+:class:`~.complementarity.StepSolver` (``solver.kernel_cache``) so that the runs of one task
+share it.  Results do not depend on what the cache holds: a cached inverse is the inverse the
+kernel would compute afresh for the same assignment (bit for bit), so a run gives the same
+numbers alone, after other runs, or in another process.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import kernel as _k
+
+
+class KernelCache:
+    """Storage of the kernel's inverse cache for one system (``cache_bytes`` bounds the pool
+    of inverses; when full the cache is cleared and refilled)."""
+
+    def __init__(self, n: int, cache_bytes: float, max_iter: int):
+        self.n = n
+        n_doubles = max(int(cache_bytes // 8), 4 * n * n)
+        self.pool = np.empty(n_doubles)  # pages are touched only as inverses are stored
+        slots = int(min(4096, max(64, n_doubles // max(n, 1))))
+        self.keys = np.zeros((slots, n), np.int8)
+        self.hashes = np.zeros(slots, np.uint64)
+        self.offs = np.zeros((slots, 3), np.int64)  # pool offset, index offset, updates
+        self.sizes = np.zeros(slots, np.int64)
+        self.ipool = np.zeros(slots * 2 * n if slots * 2 * n <= 8_000_000 else 8_000_000,
+                              np.int64)
+        self.fpool = np.zeros(self.ipool.size)
+        self.meta = np.zeros(8, np.int64)
+        self.meta[3] = -1  # no last solved assignment
+        self.counters = np.zeros(8, np.int64)
+        self.seen = np.zeros((max_iter + 1, n), np.int8)
+        rng = np.random.default_rng(20261123)
+        self.mult = rng.integers(1, 2**63 - 1, size=n, dtype=np.int64).astype(np.uint64) | 1
+
+
+def usable(solver) -> bool:
+    """The kernel applies: numba available, enabled on the solver, and every step's status
+    known without enumeration (friction below critical, or more nodes than are enumerated)."""
+    if not (_k.HAVE_KERNEL and solver.kernel):
+        return False
+    wp = solver.well_posed
+    return wp is True or solver.n > solver.enumerate_max_nodes
+
+
+def step_status(solver) -> str:
+    """The status the Python step gives a verified active-set answer."""
+    return "unique" if solver.well_posed is True else "solved"
+
+
+def run_period(solver, qw, pw, v0, guess, V, Wg, Q, P, st, act, scales, res, statuses):
+    """Steps of one period of one state; fills rows of the period arrays (as
+    :func:`~.multistate._implicit_cycles` does) and returns ``(W, guess, failure)`` where
+    ``failure`` is ``(j, StepResult)`` of a failed step or ``None``."""
+    kc = solver.kernel_cache
+    n_steps, n = qw.shape
+    V[0] = v0
+    base = v0 @ solver.K[:n]  # the first step's base from scratch: (A v, B^T v)
+    q0, p0 = qw[0] + base[:n], pw[0] + base[n:]
+    s = np.array(guess, np.int8)
+    wd = np.zeros(1)
+    status = step_status(solver)
+    c0 = kc.counters.copy()
+    j = 0
+    while j < n_steps:
+        done = _k.march(solver.K, solver.f, solver.diag, qw, pw, j, q0, p0, s, solver.feas_tol,
+                        solver.max_iter, kc.mult, kc.keys, kc.hashes, kc.offs, kc.sizes,
+                        kc.pool, kc.ipool, kc.fpool, kc.meta, kc.counters, kc.seen, V, Wg, Q, P,
+                        st, act, scales, res, wd)
+        if done > j:
+            statuses[status] = statuses.get(status, 0) + done - j
+        j = done
+        if j == n_steps:
+            break
+        r = solver.solve(V[j], qw[j], pw[j], s, base=(q0, p0), verify=False)
+        statuses[r.status] = statuses.get(r.status, 0) + 1
+        res[j] = r.residual
+        if not r.success:
+            _book(solver, kc, c0)
+            return wd[0], s, (j, r)
+        wd[0] -= float(r.q @ r.slip_increment)
+        V[j + 1], Wg[j + 1], Q[j + 1], P[j + 1] = r.slip, r.gap, r.q, r.p
+        st[j + 1], act[j] = r.states, r.active_set
+        s = np.array(r.active_set, np.int8)
+        scales[j] = r.force_scale
+        if j + 1 < n_steps:
+            q0, p0 = solver.next_base(r.q, r.p, r.gap, qw[j + 1] - qw[j], pw[j + 1] - pw[j])
+        j += 1
+    _book(solver, kc, c0)
+    return wd[0], s, None
+
+
+def _book(solver, kc, c0):
+    d = kc.counters - c0
+    t = solver.totals
+    t["steps"] += int(d[_k.C_STEPS])
+    t["iterations"] += int(d[_k.C_ITER])
+    t["cache_hits"] += int(d[_k.C_HITS])
+    t["factorizations"] += int(d[_k.C_FACT])
+    t["updates"] += int(d[_k.C_UPD])

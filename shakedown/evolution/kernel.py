@@ -1,0 +1,287 @@
+"""Compiled period loop of the implicit step (issue 13/14; MODEL.md s.4).
+
+The same active-set method as :class:`~.complementarity.StepSolver` (the guess is the previous
+step's assignment; all violated nodes switch at once; on a repeated assignment one at a time,
+the most violated first), compiled with numba so that a step costs its linear algebra, not
+Python bookkeeping.  Each state assignment's reduced matrix ``M_s`` (rows ``q_j + c_j p_j`` of
+the slipping nodes, ``q_j``, ``p_j`` of the separated ones; columns their slips and gaps) is
+kept as its explicit inverse in a bounded cache keyed by the assignment, so that a step whose
+assignment was met before costs one matrix-vector product with ``M_s^-1`` (``2 m^2`` flops, as
+a pair of triangular solves) and one with the ``m`` rows of ``K``; a new assignment within a
+few nodes of a cached one is reached by rank-one updates of that inverse (a row changed,
+a row and column added or removed: ``O(m^2)`` each) and otherwise inverted afresh
+(LAPACK through numpy); :mod:`.kernel_cache` holds both.  A fresh inverse is accepted only
+when its 1-norm condition number is below ``1e12``; every solve must satisfy its equations to
+``1e-3 feas_tol`` (relative): an updated inverse that fails is recomputed afresh, a fresh one
+that fails hands the step back.
+
+What the kernel does not do, it hands back: a step whose iteration repeats an assignment twice,
+exhausts its budget or meets a singular matrix returns to Python at that step, where
+:meth:`StepSolver.solve` finishes it (Lemke, enumeration, statuses), and the kernel resumes
+with the next step.  Every accepted step is verified as in the Python path: its sign checks
+and its complementarity residual; the equilibrium of the whole period is recomputed with ``K``
+by the caller.
+
+Without numba (``pip install numba`` is a core dependency; ``SHAKEDOWN_KERNEL=numpy`` switches
+it off) the Python path runs instead: same answers to the solver tolerance, slower.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .kernel_cache import (
+    BACKWARD,
+    FORWARD,
+    LAST_SLOT,
+    N_SLOTS,
+    SEPARATED,
+    STICK,
+    _hash,
+    _invert,
+    _layout,
+    _lookup,
+    _matrix,
+    _slot,
+    _solve_with,
+    _store,
+    _updated,
+)
+from .kernel_jit import HAVE_KERNEL, njit
+
+#: Relative accuracy the solved equations must reach (times ``feas_tol``).
+EQ_TOL = 1e-3
+#: Rank-one updates of a cached inverse allowed (in a chain) before it is recomputed afresh.
+MAX_UPDATES = 32
+#: An assignment ``r`` nodes away from the last solved one is reached by updates while
+#: ``r <= UPDATE_RATIO * m`` and ``m >= UPDATE_MIN_SIZE`` (a fresh LAPACK inverse is cheaper
+#: below that: measured crossover near ``m / 16`` changed nodes).
+UPDATE_RATIO = 1.0 / 16.0
+UPDATE_MIN_SIZE = 48
+
+__all__ = ["march", "HAVE_KERNEL"]
+
+# counter indices
+C_ITER, C_HITS, C_FACT, C_UPD, C_STEPS = 0, 1, 2, 3, 4
+
+
+@njit(cache=True)
+def _solve_set(s, K, f, q0, p0, n, ft, mult, keys, hashes, offs, sizes, pool, ipool, fpool,
+               meta, counters, z, q, p):
+    """Solve assignment ``s`` into ``z, q, p``: a cached inverse, else rank-one updates of the
+    last solved assignment's inverse, else a fresh inverse.  False when the matrix is singular
+    or the solved equations fail their check."""
+    any_free = False
+    for j in range(n):
+        if s[j] != STICK:
+            any_free = True
+            break
+    if not any_free:
+        z[:] = 0.0
+        q[:] = q0
+        p[:] = p0
+        return True
+    tol = EQ_TOL * ft
+    h = _hash(s, mult)
+    k = _lookup(s, h, keys, hashes, meta)
+    if k >= 0:
+        counters[C_HITS] += 1
+        X, free, coef = _slot(k, offs, sizes, pool, ipool, fpool)
+        if _solve_with(X, free, coef, K, q0, p0, n, z, q, p) <= tol:
+            meta[LAST_SLOT] = k
+            return True
+    else:
+        kb = meta[LAST_SLOT]
+        if (0 <= kb < meta[N_SLOTS] and sizes[kb] >= UPDATE_MIN_SIZE
+                and offs[kb, 2] < MAX_UPDATES):
+            r = 0
+            for j in range(n):
+                if keys[kb, j] != s[j]:
+                    r += 1
+            if r <= UPDATE_RATIO * sizes[kb]:
+                X, free, coef, ok = _updated(s, kb, K, f, n, keys, offs, sizes, pool, ipool,
+                                             fpool)
+                counters[C_UPD] += 1
+                if ok and _solve_with(X, free, coef, K, q0, p0, n, z, q, p) <= tol:
+                    _store(s, h, free, coef, X, offs[kb, 2] + 1, keys, hashes, offs, sizes,
+                           pool, ipool, fpool, meta)
+                    return True
+    free, coef = _layout(s, f, n)
+    X, ok = _invert(_matrix(K, free, coef, n))
+    counters[C_FACT] += 1
+    if not ok or _solve_with(X, free, coef, K, q0, p0, n, z, q, p) > tol:
+        return False
+    if k >= 0:  # a cached (updated) inverse that lost accuracy: replace it in its slot
+        o, oi = offs[k, 0], offs[k, 1]
+        m = free.size
+        pool[o:o + m * m] = X.ravel()
+        ipool[oi:oi + m] = free
+        fpool[oi:oi + m] = coef
+        offs[k, 2] = 0
+        meta[LAST_SLOT] = k
+    else:
+        _store(s, h, free, coef, X, 0, keys, hashes, offs, sizes, pool, ipool, fpool, meta)
+    return True
+
+
+@njit(cache=True)
+def _violated(s, z, q, p, f, ft, dtol, n, mag, target):
+    """Sign checks of the step problem (``ActiveSet._violations_step``): fills ``mag`` and
+    ``target`` and returns the largest normalised violation (> 1: violated)."""
+    worst = -np.inf
+    for j in range(n):
+        fp = f[j] * p[j]
+        sj = s[j]
+        c0 = -np.inf
+        c1 = -np.inf
+        c2 = -np.inf
+        c3 = -np.inf
+        if sj != SEPARATED:
+            c3 = -p[j] / ft
+        if sj == STICK:
+            c1 = -(fp + q[j]) / ft
+            c2 = (q[j] - fp) / ft
+        elif sj == FORWARD:
+            c0 = -(z[j] / dtol[j])
+        elif sj == BACKWARD:
+            c0 = z[j] / dtol[j]
+        else:
+            c0 = -z[n + j] / dtol[n + j]
+        t = 0
+        best = c0
+        if c1 > best:
+            t, best = 1, c1
+        if c2 > best:
+            t, best = 2, c2
+        if c3 > best:
+            t, best = 3, c3
+        mag[j] = best
+        target[j] = t
+        worst = max(worst, best)
+    return worst
+
+
+@njit(cache=True)
+def _visited(s, seen, n_seen):
+    for k in range(n_seen):
+        same = True
+        for j in range(s.size):
+            if seen[k, j] != s[j]:
+                same = False
+                break
+        if same:
+            return True
+    return False
+
+
+@njit(cache=True)
+def _step(s, K, f, q0, p0, n, ft, dtol, max_iter, mult, keys, hashes, offs, sizes, pool,
+          ipool, fpool, meta, counters, seen, z, q, p, mag, target):
+    """The active-set iteration of one step from the guess ``s`` (updated in place)."""
+    n_seen = 0
+    single = False
+    it = 0
+    while it < max_iter:
+        it += 1
+        if _visited(s, seen, n_seen):
+            if single:
+                break
+            single = True
+            n_seen = 0
+        if n_seen < seen.shape[0]:
+            seen[n_seen, :] = s
+            n_seen += 1
+        if not _solve_set(s, K, f, q0, p0, n, ft, mult, keys, hashes, offs, sizes, pool, ipool,
+                          fpool, meta, counters, z, q, p):
+            break
+        if _violated(s, z, q, p, f, ft, dtol, n, mag, target) <= 1.0:
+            counters[C_ITER] += it
+            return True
+        if single:
+            j = int(np.argmax(mag))
+            s[j] = target[j]
+        else:
+            for j in range(n):
+                if mag[j] > 1.0:
+                    s[j] = target[j]
+    counters[C_ITER] += it
+    return False
+
+
+@njit(cache=True)
+def _maxabs(x):
+    a = 0.0
+    for v in x:
+        a = max(a, abs(v))
+    return a
+
+
+@njit(cache=True)
+def march(K, f, diag, QW, PW, j0, q0, p0, s, feas_tol, max_iter, mult, keys, hashes, offs,
+          sizes, pool, ipool, fpool, meta, counters, seen, V, WG, Q, P, ST, ACT, SC, RES, WD):
+    """Implicit steps ``j0 .. K-1`` of one period of one state (see the module docstring).
+
+    ``q0, p0``: the base reactions of step ``j0`` (updated in place to those of the step
+    handed back); ``s``: the guess (updated in place); ``V[j0]`` the slips at its start.
+    Fills rows ``j + 1`` of ``V, WG, Q, P, ST`` and rows ``j`` of ``ACT, SC, RES``; adds the
+    dissipation to ``WD[0]``.  Returns the number of steps done (``K`` when the period is
+    complete; otherwise the index of the step handed back to Python).
+    """
+    n = f.size
+    n_steps = QW.shape[0]
+    z = np.empty(2 * n)
+    q = np.empty(n)
+    p = np.empty(n)
+    mag = np.empty(n)
+    target = np.empty(n, np.int8)
+    trial = s.copy()
+    for j in range(j0, n_steps):
+        scale = max(_maxabs(QW[j]), _maxabs(PW[j]), _maxabs(q0), _maxabs(p0))
+        if scale <= 0.0:
+            scale = 1.0
+        ft = feas_tol * scale
+        dtol = ft / diag
+        trial[:] = s
+        if not _step(trial, K, f, q0, p0, n, ft, dtol, max_iter, mult, keys, hashes, offs,
+                     sizes, pool, ipool, fpool, meta, counters, seen, z, q, p, mag, target):
+            return j
+        counters[C_STEPS] += 1
+        s[:] = trial
+        comp = 0.0
+        wd = 0.0
+        for i in range(n):
+            dv = z[i]
+            w = z[n + i]
+            V[j + 1, i] = V[j, i] + dv
+            WG[j + 1, i] = w
+            Q[j + 1, i] = q[i]
+            P[j + 1, i] = p[i]
+            wd += q[i] * dv
+            fp = f[i] * p[i]
+            a = dv * diag[i]
+            comp = max(comp, abs(min(w * diag[n + i], p[i])),
+                       abs(min(max(a, 0.0), fp + q[i])), abs(min(max(-a, 0.0), fp - q[i])))
+            st = STICK
+            if w > dtol[n + i]:
+                st = SEPARATED
+            elif dv > dtol[i]:
+                st = FORWARD
+            elif dv < -dtol[i]:
+                st = BACKWARD
+            ST[j + 1, i] = st
+            ACT[j, i] = s[i]
+        WD[0] -= wd
+        SC[j] = scale
+        RES[j] = comp / scale
+        if j + 1 < n_steps:  # the next step's base from this step's reactions (next_base)
+            for i in range(n):
+                q0[i] = q[i] + QW[j + 1, i] - QW[j, i]
+                p0[i] = p[i] + PW[j + 1, i] - PW[j, i]
+            for i in range(n):
+                w = z[n + i]
+                if w != 0.0:
+                    row = K[n + i]
+                    for k in range(n):
+                        q0[k] -= w * row[k]
+                        p0[k] -= w * row[n + k]
+    return n_steps

@@ -1,0 +1,233 @@
+"""The compiled period loop (``shakedown.evolution.kernel``) against the Python step.
+
+References: :meth:`StepSolver.solve` step by step (``StepSolver(kernel=False)``), fresh LAPACK
+inverses for the rank-one updates, independent runs.  Also: the kernel's own checks (signs,
+equations, the per-period equilibrium) flag wrong answers, steps it cannot finish are handed
+back to Python, and ``SHAKEDOWN_KERNEL=numpy`` switches it off.
+"""
+
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import shakedown as sd
+from shakedown.evolution import fast_period, kernel, kernel_cache
+from shakedown.evolution.complementarity import FEAS_TOL, StepSolver
+
+pytestmark = pytest.mark.skipif(not kernel.HAVE_KERNEL, reason="numba kernel not available")
+
+
+def coupled(rng, n, fraction=0.5):
+    """Random coupled SPD K (M M^T + N I), friction at ``fraction`` of the sufficient bound."""
+    M = rng.normal(size=(2 * n, 2 * n))
+    K = M @ M.T + n * np.eye(2 * n)
+    s = sd.DiscreteSystem(K[:n, :n], K[:n, n:], K[n:, n:], friction=1.0)
+    return s.with_friction(fraction * min(s.critical_friction().value, 2.0))
+
+
+def load_of(rng, s, amp=2.0, p_mean=1.0, p_amp=0.3):
+    n = s.n_nodes
+    f = float(s.friction.max())
+    return sd.LoadCycle.from_harmonics(0.1 * rng.normal(size=n), np.full(n, p_mean),
+                                       q_cos=amp * f * rng.normal(size=n),
+                                       p_sin=p_amp * rng.normal(size=n))
+
+
+def assert_same_run(a, b, s):
+    assert a.status == b.status
+    assert a.n_cycles == b.n_cycles and a.period == b.period
+    W = a.force_scale ** 2 / s.A.diagonal().min()
+    np.testing.assert_allclose(a.dissipation, b.dissipation, rtol=0, atol=1e-9 * W)
+    tol = 10 * FEAS_TOL * a.force_scale / s.A.diagonal().min()
+    np.testing.assert_allclose(a.final_slip, b.final_slip, rtol=0, atol=tol)
+    np.testing.assert_allclose(a.final_gap, b.final_gap, rtol=0, atol=tol)
+    if a.final_active_sets is not None:
+        np.testing.assert_array_equal(a.final_active_sets, b.final_active_sets)
+    np.testing.assert_array_equal(a.stuck_nodes, b.stuck_nodes)
+    assert a.step_statuses == b.step_statuses
+
+
+@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("lam", [0.3, 1.0, 2.5])
+def test_kernel_equals_python_steps(seed, lam):
+    """Whole runs: compiled periods against the Python step, shakedown to cyclic slip, with
+    separation (the normal load dips below zero at some nodes for seeds 3-5)."""
+    rng = np.random.default_rng(seed)
+    n = 6 + 2 * seed
+    s = coupled(rng, n)
+    load = load_of(rng, s, p_mean=1.0 if seed < 3 else 0.2, p_amp=0.3 if seed < 3 else 1.0)
+    v0 = sd.sample_initial_slips(s, load, 1, rng=rng)[0]
+    kw = dict(steps_per_cycle=32, max_cycles=60, tol=1e-10, initial_slip=v0)
+    fast = StepSolver(s)
+    a = sd.solve_cycles(s, load, lam, solver=fast, **kw)
+    b = sd.solve_cycles(s, load, lam, solver=StepSolver(s, kernel=False), **kw)
+    assert fast.kernel_cache.counters[kernel.C_STEPS] > 0  # the kernel did the steps
+    assert_same_run(a, b, s)
+
+
+def test_kernel_large_system_uses_updates_and_matches():
+    """N = 60 in full slip: assignments of more than UPDATE_MIN_SIZE unknowns, reached by
+    rank-one updates of cached inverses; same runs as the Python step."""
+    rng = np.random.default_rng(7)
+    n = 60
+    s = coupled(rng, n, fraction=0.3)
+    load = load_of(rng, s, amp=6.0, p_mean=1.0, p_amp=0.2)
+    fast = StepSolver(s)
+    kw = dict(steps_per_cycle=48, max_cycles=40, tol=1e-10)
+    a = sd.solve_cycles(s, load, 1.0, solver=fast, **kw)
+    b = sd.solve_cycles(s, load, 1.0, solver=StepSolver(s, kernel=False), **kw)
+    assert fast.kernel_cache.counters[kernel.C_UPD] > 0
+    assert_same_run(a, b, s)
+
+
+TRANSITIONS = [(0, 1), (0, 2), (0, 3), (1, 0), (1, 2), (1, 3), (2, 0), (2, 1), (2, 3),
+               (3, 0), (3, 1), (3, 2)]
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_rank_one_updates_equal_fresh_inverse(seed):
+    """Every kind of state change, many nodes at once: the updated inverse is the inverse of
+    the target assignment's matrix (compared with a fresh LAPACK inverse, in the slot order)."""
+    rng = np.random.default_rng(seed)
+    n = 16
+    s = coupled(rng, n)
+    kc = fast_period.KernelCache(n, 1e6, 100)
+    K, f = s.K, np.asarray(s.friction, float)
+    base = rng.integers(0, 4, n).astype(np.int8)
+    new = base.copy()
+    for j, (a, b) in zip(rng.permutation(n)[:12], TRANSITIONS, strict=False):
+        base[j], new[j] = a, b
+    free, coef = kernel_cache._layout(base, f, n)
+    X, ok = kernel_cache._invert(kernel_cache._matrix(K, free, coef, n))
+    assert ok
+    kb = kernel_cache._store(base, np.uint64(kernel_cache._hash(base, kc.mult)), free, coef, X, 0, kc.keys,
+                             kc.hashes, kc.offs, kc.sizes, kc.pool, kc.ipool, kc.fpool, kc.meta)
+    Xu, fu, cu, ok = kernel_cache._updated(new, kb, K, f, n, kc.keys, kc.offs, kc.sizes, kc.pool,
+                                           kc.ipool, kc.fpool)
+    assert ok
+    f_ref, c_ref = kernel_cache._layout(new, f, n)
+    assert sorted(fu) == sorted(f_ref)
+    M = kernel_cache._matrix(K, fu, cu, n)  # the target matrix in the updated slot's order
+    np.testing.assert_allclose(Xu @ M, np.eye(fu.size), atol=1e-10)
+    order = [list(f_ref).index(i) for i in fu]
+    np.testing.assert_array_equal(cu, c_ref[order])
+
+
+def test_kernel_checks_flag_wrong_answers():
+    """The sign check objects to a slip of the wrong sign, the equation check to a corrupted
+    inverse (which the kernel then replaces by a fresh one, answer unchanged)."""
+    rng = np.random.default_rng(11)
+    n = 8
+    s = coupled(rng, n)
+    K, f, diag = s.K, np.asarray(s.friction, float), np.concatenate(
+        [np.diag(s.A), np.diag(s.C)])
+    kc = fast_period.KernelCache(n, 1e6, 100)
+    sv = np.full(n, 1, np.int8)  # all forward
+    q0 = -3.0 * np.ones(n) - 0.1 * rng.random(n)
+    p0 = np.ones(n)
+    z, q, p = np.empty(2 * n), np.empty(n), np.empty(n)
+    args = (kc.mult, kc.keys, kc.hashes, kc.offs, kc.sizes, kc.pool, kc.ipool, kc.fpool,
+            kc.meta, kc.counters)
+    ft = FEAS_TOL * 3.1
+    assert kernel._solve_set(sv, K, f, q0, p0, n, ft, *args, z, q, p)
+    z_ok = z.copy()
+    mag, target = np.empty(n), np.empty(n, np.int8)
+    dtol = ft / diag
+    worst_ok = kernel._violated(sv, z, q, p, f, ft, dtol, n, mag, target)
+    zb = z.copy()
+    zb[0] = -abs(z[0]) - 1e-3  # a forward node moving backward
+    assert kernel._violated(sv, zb, q, p, f, ft, dtol, n, mag, target) > 1.0
+    assert target[0] == 0  # back to stick
+    # a corrupted cached inverse fails the equation check and is recomputed
+    m = kc.sizes[0]
+    kc.pool[: m * m] *= 1.0 + 1e-6
+    fact = kc.counters[kernel.C_FACT]
+    assert kernel._solve_set(sv, K, f, q0, p0, n, ft, *args, z, q, p)
+    assert kc.counters[kernel.C_FACT] == fact + 1
+    np.testing.assert_allclose(z, z_ok, rtol=1e-12, atol=1e-15)
+    if worst_ok <= 1.0:  # the genuine answer passes its own sign check
+        assert kernel._violated(sv, z, q, p, f, ft, dtol, n, mag, target) <= 1.0
+
+
+def test_wrong_kernel_reactions_fail_the_period_check(monkeypatch):
+    """Tangential reactions 1e-6 F off in one step: the per-period equilibrium recomputed with K
+    stops the run with a clear message."""
+    rng = np.random.default_rng(2)
+    s = coupled(rng, 6)
+    load = load_of(rng, s)
+    real = kernel.march
+
+    def wrong(*a):
+        out = real(*a)
+        Q = a[24]
+        Q[3] += 1e-6 * np.abs(Q).max()
+        return out
+
+    monkeypatch.setattr(kernel, "march", wrong)
+    run = sd.solve_cycles(s, load, 1.0, steps_per_cycle=16, max_cycles=10)
+    assert run.status == "step_failed" and "equilibrium residual" in run.message
+
+
+def test_handed_back_steps_are_finished_by_python():
+    """With an iteration budget of one, the kernel hands back every step whose guess is wrong;
+    the Python step finishes it (Lemke) and the run equals the all-Python run."""
+    rng = np.random.default_rng(5)
+    n = 8
+    s = coupled(rng, n)
+    load = load_of(rng, s, amp=3.0)
+    kw = dict(steps_per_cycle=24, max_cycles=40, tol=1e-10)
+    fast = StepSolver(s, max_iter=1)
+    a = sd.solve_cycles(s, load, 1.0, solver=fast, **kw)
+    b = sd.solve_cycles(s, load, 1.0, solver=StepSolver(s, max_iter=1, kernel=False), **kw)
+    assert fast.totals["lemke_calls"] > 0 and fast.kernel_cache.counters[kernel.C_STEPS] > 0
+    assert_same_run(a, b, s)
+
+
+def test_above_critical_friction_statuses():
+    """Friction above the sufficient bound, N > 4 (no enumeration): the kernel's steps are
+    "solved" as the Python step's are, with the same answers."""
+    rng = np.random.default_rng(9)
+    n = 6
+    s = coupled(rng, n, fraction=1.5)
+    assert s.critical_friction().well_posed is False
+    load = load_of(rng, s)
+    kw = dict(steps_per_cycle=24, max_cycles=40, tol=1e-10)
+    a = sd.solve_cycles(s, load, 1.0, solver=StepSolver(s), **kw)
+    b = sd.solve_cycles(s, load, 1.0, solver=StepSolver(s, kernel=False), **kw)
+    assert set(a.step_statuses) <= {"solved", "unique"} and "solved" in a.step_statuses
+    assert_same_run(a, b, s)
+
+
+@pytest.mark.parametrize("force, length", [(1e6, 1e-3), (1e-4, 1e3)])
+def test_kernel_units(force, length):
+    """Forces x force, lengths x length: W scales by force x length, slips by length."""
+    rng = np.random.default_rng(4)
+    n = 10
+    s = coupled(rng, n)
+    load = load_of(rng, s, amp=3.0)
+    k = force / length
+    s2 = sd.DiscreteSystem(k * s.A, k * s.B, k * s.C, friction=s.friction)
+    load2 = load.scaled(force)
+    kw = dict(steps_per_cycle=24, max_cycles=40, tol=1e-10)
+    a = sd.solve_cycles(s, load, 1.2, **kw)
+    b = sd.solve_cycles(s2, load2, 1.2, **kw)
+    assert a.n_cycles == b.n_cycles and a.status == b.status == "periodic"
+    assert b.steady_dissipation == pytest.approx(force * length * a.steady_dissipation,
+                                                 rel=1e-9, abs=1e-12 * force * length)
+    np.testing.assert_allclose(b.final_slip, length * a.final_slip, rtol=1e-8,
+                               atol=1e-9 * length * np.abs(a.final_slip).max())
+
+
+def test_environment_switch_turns_the_kernel_off():
+    code = ("import shakedown.evolution.kernel as k, shakedown as sd, numpy as np;"
+            "s = sd.DiscreteSystem([[1.0]], [[0.0]], [[1.0]], friction=0.5);"
+            "L = sd.LoadCycle.from_harmonics([0.0], [1.0], q_cos=[1.0]);"
+            "r = sd.solve_cycles(s, L, 1.0, steps_per_cycle=8);"
+            "print(k.HAVE_KERNEL, r.status)")
+    env = {**os.environ, "SHAKEDOWN_KERNEL": "numpy"}
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                         check=True)
+    assert out.stdout.split() == ["False", "periodic"]
