@@ -3,8 +3,9 @@ uniqueness studies (MODEL.md s.4).
 
 Modules, bottom up: :mod:`.lemke` (pivoting), :mod:`.step_types`, :mod:`.factors`,
 :mod:`.active_set`, :mod:`.fallbacks` and :mod:`.complementarity` (the step solver),
-:mod:`.events` (exact events), :mod:`.cycle_results` and :mod:`.multistate` (the period loop,
-several initial states together), :mod:`.cycles` (:func:`solve_cycles`), :mod:`.steady_maps`
+:mod:`.kernel_jit`, :mod:`.kernel_cache`, :mod:`.kernel` and :mod:`.fast_period` (the compiled
+period loop, numba), :mod:`.events` (exact events), :mod:`.cycle_results` and :mod:`.multistate`
+(the period loop, several initial states together), :mod:`.cycles` (:func:`solve_cycles`), :mod:`.steady_maps`
 and :mod:`.steady` (:func:`steady_cycle`), :mod:`.uniqueness` (:func:`uniqueness_study`).
 May import :mod:`shakedown.model` only.
 """

@@ -3,9 +3,11 @@
 
 :class:`KernelCache` is the kernel's bounded cache of assignment inverses, kept with the
 :class:`~.complementarity.StepSolver` (``solver.kernel_cache``) so that the runs of one task
-share it.  Results do not depend on what the cache holds: a cached inverse is the inverse the
-kernel would compute afresh for the same assignment (bit for bit), so a run gives the same
-numbers alone, after other runs, or in another process.
+share it.  An inverse reached by rank-one updates differs from a fresh one in the last bits, so
+a run's numbers can depend, at round-off level, on which runs the same solver did before (as
+with the Python step's LU cache and Woodbury updates): the study gives every (realisation,
+load factor) task a fresh solver and runs its states in a fixed order, so its rows are
+bit-identical for any number of workers.
 """
 
 from __future__ import annotations

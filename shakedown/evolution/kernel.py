@@ -45,18 +45,20 @@ from .kernel_cache import (
     _slot,
     _solve_with,
     _store,
-    _updated,
 )
 from .kernel_jit import HAVE_KERNEL, njit
+from .kernel_updates import changed_unknowns, updated
 
 #: Relative accuracy the solved equations must reach (times ``feas_tol``).
 EQ_TOL = 1e-3
 #: Rank-one updates of a cached inverse allowed (in a chain) before it is recomputed afresh.
 MAX_UPDATES = 32
-#: An assignment ``r`` nodes away from the last solved one is reached by updates while
-#: ``r <= UPDATE_RATIO * m`` and ``m >= UPDATE_MIN_SIZE`` (a fresh LAPACK inverse is cheaper
-#: below that: measured crossover near ``m / 16`` changed nodes).
-UPDATE_RATIO = 1.0 / 16.0
+#: An assignment of ``m_t`` unknowns that differ in ``r`` places from the last solved one's
+#: (``m`` unknowns, ``m >= UPDATE_MIN_SIZE``) is reached by block updates
+#: (:mod:`.kernel_updates`, about ``4 m^2 r + r^3`` flops) while
+#: ``UPDATE_COST * (4 m^2 r + r^3) < m_t^3``, the flops of a fresh inverse (``2 m_t^3``) with
+#: LAPACK's better speed per flop counted in ``UPDATE_COST``.
+UPDATE_COST = 1.0
 UPDATE_MIN_SIZE = 48
 
 __all__ = ["march", "HAVE_KERNEL"]
@@ -94,13 +96,13 @@ def _solve_set(s, K, f, q0, p0, n, ft, mult, keys, hashes, offs, sizes, pool, ip
         kb = meta[LAST_SLOT]
         if (0 <= kb < meta[N_SLOTS] and sizes[kb] >= UPDATE_MIN_SIZE
                 and offs[kb, 2] < MAX_UPDATES):
-            r = 0
+            r = changed_unknowns(keys[kb], s, n)
+            mt = 0
             for j in range(n):
-                if keys[kb, j] != s[j]:
-                    r += 1
-            if r <= UPDATE_RATIO * sizes[kb]:
-                X, free, coef, ok = _updated(s, kb, K, f, n, keys, offs, sizes, pool, ipool,
-                                             fpool)
+                mt += (s[j] != STICK) + (s[j] == SEPARATED)
+            if UPDATE_COST * (4.0 * sizes[kb] ** 2 * r + float(r) ** 3) < float(mt) ** 3:
+                X, free, coef, ok = updated(s, kb, K, f, n, keys, offs, sizes, pool, ipool,
+                                            fpool)
                 counters[C_UPD] += 1
                 if ok and _solve_with(X, free, coef, K, q0, p0, n, z, q, p) <= tol:
                     _store(s, h, free, coef, X, offs[kb, 2] + 1, keys, hashes, offs, sizes,

@@ -14,6 +14,11 @@ the solver tolerance; they are bit-identical for the same batch in any process (
 order of work is fixed), not bit-identical to independent runs (a triangular solve with several
 right-hand sides rounds differently from one with one).
 
+With the compiled kernel (:mod:`.fast_period`, the default when numba is available) each
+state's period is marched by the kernel instead, one state after the other, sharing the
+kernel's cache of assignment inverses; the lockstep Python path above runs with
+``StepSolver(kernel=False)`` or ``SHAKEDOWN_KERNEL=numpy``.
+
 Scales: the per-step force scale of :class:`StepResult`, the per-run force scale ``F`` of
 :mod:`.cycles`.
 """

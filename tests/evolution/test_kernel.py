@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import shakedown as sd
-from shakedown.evolution import fast_period, kernel, kernel_cache
+from shakedown.evolution import fast_period, kernel, kernel_cache, kernel_updates
 from shakedown.evolution.complementarity import FEAS_TOL, StepSolver
 
 pytestmark = pytest.mark.skipif(not kernel.HAVE_KERNEL, reason="numba kernel not available")
@@ -70,7 +70,7 @@ def test_kernel_equals_python_steps(seed, lam):
 
 def test_kernel_large_system_uses_updates_and_matches():
     """N = 60 in full slip: assignments of more than UPDATE_MIN_SIZE unknowns, reached by
-    rank-one updates of cached inverses; same runs as the Python step."""
+    block updates of cached inverses; same runs as the Python step."""
     rng = np.random.default_rng(7)
     n = 60
     s = coupled(rng, n, fraction=0.3)
@@ -88,7 +88,7 @@ TRANSITIONS = [(0, 1), (0, 2), (0, 3), (1, 0), (1, 2), (1, 3), (2, 0), (2, 1), (
 
 
 @pytest.mark.parametrize("seed", range(4))
-def test_rank_one_updates_equal_fresh_inverse(seed):
+def test_block_updates_equal_fresh_inverse(seed):
     """Every kind of state change, many nodes at once: the updated inverse is the inverse of
     the target assignment's matrix (compared with a fresh LAPACK inverse, in the slot order)."""
     rng = np.random.default_rng(seed)
@@ -105,8 +105,8 @@ def test_rank_one_updates_equal_fresh_inverse(seed):
     assert ok
     kb = kernel_cache._store(base, np.uint64(kernel_cache._hash(base, kc.mult)), free, coef, X, 0, kc.keys,
                              kc.hashes, kc.offs, kc.sizes, kc.pool, kc.ipool, kc.fpool, kc.meta)
-    Xu, fu, cu, ok = kernel_cache._updated(new, kb, K, f, n, kc.keys, kc.offs, kc.sizes, kc.pool,
-                                           kc.ipool, kc.fpool)
+    Xu, fu, cu, ok = kernel_updates.updated(new, kb, K, f, n, kc.keys, kc.offs, kc.sizes, kc.pool,
+                                            kc.ipool, kc.fpool)
     assert ok
     f_ref, c_ref = kernel_cache._layout(new, f, n)
     assert sorted(fu) == sorted(f_ref)
@@ -231,3 +231,21 @@ def test_environment_switch_turns_the_kernel_off():
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
                          check=True)
     assert out.stdout.split() == ["False", "periodic"]
+
+
+def test_runs_sharing_a_solver_equal_independent_runs():
+    """As the study runs them: the states of one (system, lam) one after the other on one
+    solver (its kernel cache: hits and block updates from earlier runs' inverses) give the
+    steady W and states of independent runs with fresh solvers, to the solver tolerance."""
+    rng = np.random.default_rng(13)
+    n = 50
+    s = coupled(rng, n, fraction=0.3)
+    load = load_of(rng, s, amp=5.0)
+    V0 = sd.sample_initial_slips(s, load, 4, rng=rng)
+    kw = dict(steps_per_cycle=32, max_cycles=60, tol=1e-10)
+    shared = StepSolver(s)
+    for v0 in V0:
+        a = sd.solve_cycles(s, load, 1.0, initial_slip=v0, solver=shared, **kw)
+        b = sd.solve_cycles(s, load, 1.0, initial_slip=v0, solver=StepSolver(s), **kw)
+        assert_same_run(a, b, s)
+    assert shared.kernel_cache.counters[kernel.C_HITS] > 0
