@@ -188,9 +188,20 @@ class CrackNetworkModel:
                     "a DiscreteSystem needs a symmetric K. Use symmetric=True (the default), or "
                     "read the raw matrices from .stiffness_raw / .blocks(symmetric=False)"
                 )
-        A, B, _, C = self.blocks(symmetric=True)
+        # the blocks of blocks(symmetric=True), the same numbers, built one at a time from
+        # the raw K (no symmetrised copy of all of K; DiscreteSystem copies them into its K)
+        n = self.n_cracks
+        K4 = self.stiffness_raw.reshape(n, 2, n, 2)
+
+        def sym(P, Q):
+            out = P + Q.T
+            out *= 0.5
+            return out
+
         try:
-            return DiscreteSystem(A, B, C, self.friction)
+            return DiscreteSystem(sym(K4[:, 1, :, 1], K4[:, 1, :, 1]),
+                                  sym(K4[:, 1, :, 0], K4[:, 0, :, 1]),
+                                  sym(K4[:, 0, :, 0], K4[:, 0, :, 0]), self.friction)
         except NotPositiveDefiniteError:
             raise NotPositiveDefiniteError(
                 f"the crack-network stiffness K is not positive definite (smallest eigenvalue "

@@ -33,7 +33,7 @@ EXACT_CRITICAL_FRICTION_MAX_NODES = 4
 
 
 def _as_matrix(name: str, value, n: int | None = None) -> np.ndarray:
-    arr = real_array(name, value, what="a real 2-D array")
+    arr = real_array(name, value, what="a real 2-D array", copy=False)  # only read: K is new
     if arr.ndim == 0 and n is None:
         arr = arr.reshape(1, 1)
     if arr.ndim != 2 or arr.shape[0] != arr.shape[1]:
@@ -180,16 +180,23 @@ class DiscreteSystem:
                     f"{self.symmetry_rtol:g} * max|K| = {self.symmetry_rtol * scale:.3g}); "
                     "symmetrise it, e.g. (M + M.T) / 2, or pass a larger symmetry_rtol"
                 )
-        # store exactly symmetric blocks so that downstream factorizations see symmetric data
-        A = 0.5 * (A + A.T)
-        C = 0.5 * (C + C.T)
+        # one exactly symmetric K (downstream factorizations see symmetric data); A, B, C are
+        # views of its blocks, so the system holds 4 N^2 numbers, not 7 N^2
+        K = np.empty((2 * n, 2 * n))
+        np.add(A, A.T, out=K[:n, :n])
+        np.add(C, C.T, out=K[n:, n:])
+        K[:n, :n] *= 0.5
+        K[n:, n:] *= 0.5
+        K[:n, n:] = B
+        K[n:, :n] = B.T
+        del A, B, C
         # positive definite and not numerically singular (cond <= MAX_CONDITION)
-        check_conditioning("K = [[A, B], [B^T, C]]", np.block([[A, B], [B.T, C]]))
-        for arr in (A, B, C):
-            arr.setflags(write=False)
-        object.__setattr__(self, "A", A)
-        object.__setattr__(self, "B", B)
-        object.__setattr__(self, "C", C)
+        check_conditioning("K = [[A, B], [B^T, C]]", K)
+        K.setflags(write=False)
+        self.__dict__["K"] = K  # the cached_property's value
+        object.__setattr__(self, "A", K[:n, :n])
+        object.__setattr__(self, "B", K[:n, n:])
+        object.__setattr__(self, "C", K[n:, n:])
         object.__setattr__(self, "friction", f)
 
     # ------------------------------------------------------------------ properties
@@ -200,8 +207,9 @@ class DiscreteSystem:
 
     @cached_property
     def K(self) -> np.ndarray:
-        """The full reduced stiffness ``[[A, B], [B^T, C]]``, shape (2N, 2N)."""
-        K = np.block([[self.A, self.B], [self.B.T, self.C]])
+        """The full reduced stiffness ``[[A, B], [B^T, C]]``, shape (2N, 2N) (read-only; ``A``,
+        ``B``, ``C`` are views of its blocks)."""
+        K = np.block([[self.A, self.B], [self.B.T, self.C]])  # only for unpickled old objects
         K.setflags(write=False)
         return K
 

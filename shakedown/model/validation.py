@@ -95,8 +95,10 @@ def check_node_vector(name: str, value, n: int, *, nonneg: bool = False,
 MAX_CONDITION = 1e12
 
 
-def real_array(name: str, value, *, what: str = "a real array") -> np.ndarray:
+def real_array(name: str, value, *, what: str = "a real array", copy: bool = True) -> np.ndarray:
     """``value`` as a float array; complex, boolean-free object or text input is an error.
+
+    ``copy=False``: a float ndarray is returned as it is (a view, for callers that only read).
 
     Complex input is refused rather than cast (numpy would drop the imaginary part with only
     a warning).
@@ -109,7 +111,7 @@ def real_array(name: str, value, *, what: str = "a real array") -> np.ndarray:
             "e.g. np.real(...), if the imaginary part is round-off)"
         )
     try:
-        return np.array(value, dtype=float)
+        return np.array(value, dtype=float) if copy else np.asarray(value, dtype=float)
     except (TypeError, ValueError) as exc:
         raise InputError(f"{name} must be {what}; got {type(value).__name__}") from exc
 

@@ -32,3 +32,21 @@ def test_wrong_length_q0_is_named_q0_when_the_system_is_known():
     # the Python API cannot know which of q0, p0 is wrong: it names both with their lengths
     with pytest.raises(sd.ShapeError, match=r"q0 has 3 entries but p0 has 2"):
         sd.LoadCycle.from_harmonics(q0=[0.1, -0.1, 0.0], p0=[1.0, 1.0], q_cos=[0.5, 0.0])
+
+
+def test_system_keeps_one_copy_of_K_and_not_the_callers_arrays():
+    """A, B, C are read-only views of the one symmetric K (4 N^2 numbers held, not 7 N^2), and
+    the caller's arrays are copied: changing them later does not change the system."""
+    import numpy as np
+
+    import shakedown as sd
+
+    A = np.array([[2.0, 0.5], [0.5, 2.0]])
+    B = np.array([[0.1, 0.2], [0.0, 0.3]])
+    C = np.array([[3.0, 0.0], [0.0, 3.0]])
+    s = sd.DiscreteSystem(A, B, C, friction=0.3)
+    assert all(np.shares_memory(M, s.K) for M in (s.A, s.B, s.C))
+    assert not any(M.flags.writeable for M in (s.A, s.B, s.C, s.K))
+    np.testing.assert_array_equal(s.K, np.block([[A, B], [B.T, C]]))
+    A[0, 0] = B[0, 0] = C[0, 0] = 99.0
+    assert s.A[0, 0] == 2.0 and s.B[0, 0] == 0.1 and s.C[0, 0] == 3.0
