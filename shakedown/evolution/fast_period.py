@@ -105,3 +105,29 @@ def _book(solver, kc, c0):
     t["cache_hits"] += int(d[_k.C_HITS])
     t["factorizations"] += int(d[_k.C_FACT])
     t["updates"] += int(d[_k.C_UPD])
+
+
+def warm_up() -> float:
+    """Compile the kernel (first use after installing: 10-25 s, written to numba's cache) or
+    load it from the cache (about 0.5 s), once per process; the seconds spent.
+
+    A study calls this before it starts worker processes, so that they load the cache
+    instead of compiling the kernel each at the same time.
+    """
+    import time
+
+    if not _k.HAVE_KERNEL:
+        return 0.0
+    t = time.perf_counter()
+    n = 1
+    K = np.array([[1.0, 0.0], [0.0, 1.0]])
+    kc = KernelCache(n, 1e5, 4)
+    qw = np.array([[-2.0], [2.0]])
+    pw = np.ones((2, 1))
+    V, Wg, Q, P = (np.zeros((3, n)) for _ in range(4))
+    st, act = np.zeros((3, n), np.int8), np.zeros((2, n), np.int8)
+    _k.march(K, np.array([0.5]), np.ones(2), qw, pw, 0, qw[0].copy(), pw[0].copy(),
+             np.zeros(n, np.int8), 1e-9, 4, kc.mult, kc.keys, kc.hashes, kc.offs, kc.sizes,
+             kc.pool, kc.ipool, kc.fpool, kc.meta, kc.counters, kc.seen, V, Wg, Q, P, st, act,
+             np.zeros(2), np.zeros(2), np.zeros(1))
+    return time.perf_counter() - t

@@ -171,6 +171,9 @@ class Workers:
                 fut.set_exception(exc)
             return fut
         if self._pool is None:
+            from ..evolution.fast_period import warm_up
+
+            warm_up()  # compile the kernel here once: the workers then load it from the cache
             ctx = multiprocessing.get_context(self.mp_context)
             self._pool = cf.ProcessPoolExecutor(
                 max_workers=self.n_workers, mp_context=ctx, initializer=_worker_init,
