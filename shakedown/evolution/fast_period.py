@@ -69,8 +69,10 @@ def run_period(solver, qw, pw, v0, guess, V, Wg, Q, P, st, act, scales, res, sta
     status = step_status(solver)
     c0 = kc.counters.copy()
     j = 0
+    K, f = _readonly(solver.K), _readonly(solver.f)
+    qw, pw = np.ascontiguousarray(qw), np.ascontiguousarray(pw)
     while j < n_steps:
-        done = _k.march(solver.K, solver.f, solver.diag, qw, pw, j, q0, p0, s, solver.feas_tol,
+        done = _k.march(K, f, solver.diag, qw, pw, j, q0, p0, s, solver.feas_tol,
                         solver.max_iter, kc.mult, kc.keys, kc.hashes, kc.offs, kc.sizes,
                         kc.pool, kc.ipool, kc.fpool, kc.meta, kc.counters, kc.seen, V, Wg, Q, P,
                         st, act, scales, res, wd)
@@ -95,6 +97,14 @@ def run_period(solver, qw, pw, v0, guess, V, Wg, Q, P, st, act, scales, res, sta
         j += 1
     _book(solver, kc, c0)
     return wd[0], s, None
+
+
+def _readonly(a):
+    """A read-only view: the kernel is compiled for one array type (numba types a read-only
+    array apart from a writable one), so that it is compiled once, not once per flag."""
+    v = np.asarray(a, float).view()
+    v.setflags(write=False)
+    return v
 
 
 def _book(solver, kc, c0):
@@ -126,7 +136,7 @@ def warm_up() -> float:
     pw = np.ones((2, 1))
     V, Wg, Q, P = (np.zeros((3, n)) for _ in range(4))
     st, act = np.zeros((3, n), np.int8), np.zeros((2, n), np.int8)
-    _k.march(K, np.array([0.5]), np.ones(2), qw, pw, 0, qw[0].copy(), pw[0].copy(),
+    _k.march(_readonly(K), _readonly([0.5]), np.ones(2), qw, pw, 0, qw[0].copy(), pw[0].copy(),
              np.zeros(n, np.int8), 1e-9, 4, kc.mult, kc.keys, kc.hashes, kc.offs, kc.sizes,
              kc.pool, kc.ipool, kc.fpool, kc.meta, kc.counters, kc.seen, V, Wg, Q, P, st, act,
              np.zeros(2), np.zeros(2), np.zeros(1))
