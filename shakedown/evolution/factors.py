@@ -6,6 +6,12 @@ separated ones.  :class:`FactorCache` (a mixin of :class:`~.complementarity.Step
 LU factors per assignment (LRU, bounded in bytes) and solves an assignment within
 ``max(max_update_rank, update_fraction * m)`` changed nodes of the last factorized one by a
 Sherman-Morrison-Woodbury update of it (refactorized when the update would cost more).
+
+With the compiled kernel available (``StepSolver(kernel=True)``, the default), every
+assignment system is solved by the kernel's inverse cache and block updates instead
+(:meth:`FactorCache._kernel_solve`, :mod:`.kernel`): the Python step, the steps the period loop
+hands back, and the rate problems of the event-driven path then share the kernel's
+factorizations; the LU cache here serves ``kernel=False``.
 """
 
 from __future__ import annotations
@@ -16,7 +22,11 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.linalg.lapack import dgecon
 
+from . import kernel as _kernel
 from .step_types import BACKWARD, FORWARD, SEPARATED, STICK, _Factor
+
+#: ``_last_factor`` of an answer solved by the compiled kernel (its reactions are kept).
+_KERNEL = object()
 
 
 class FactorCache:
@@ -147,6 +157,8 @@ class FactorCache:
         """``z = (dv, w)`` of assignment ``s``; ``None`` if its matrix is singular."""
         n = self.n
         self._last_factor = None
+        if self.kernel and _kernel.HAVE_KERNEL:
+            return self._kernel_solve(s, q0, p0, scale)
         if not np.any(s != STICK):
             return np.zeros(2 * n)
         key = s.tobytes()
@@ -181,6 +193,32 @@ class FactorCache:
         self._last_factor = F
         return z
 
+    def _kernel_solve(self, s, q0, p0, scale):
+        """``z`` of assignment ``s`` by the compiled kernel's inverse cache (cache hit, block
+        update or fresh inverse, see :mod:`.kernel`); its reactions are kept for
+        :meth:`_reactions`.  ``None`` when the matrix is singular or the answer inaccurate."""
+        from .fast_period import _readonly
+
+        n = self.n
+        kc = self.kernel_cache
+        z, q, p = np.empty(2 * n), np.empty(n), np.empty(n)
+        c0 = kc.counters.copy()
+        ok = _kernel._solve_set(
+            np.array(s, np.int8), _readonly(self.K), _readonly(self.f),
+            np.ascontiguousarray(q0, float), np.ascontiguousarray(p0, float), n,
+            self.feas_tol * scale, kc.mult, kc.keys, kc.hashes, kc.offs, kc.sizes, kc.pool,
+            kc.ipool, kc.fpool, kc.meta, kc.counters, z, q, p)
+        d = kc.counters - c0
+        for name, k in (("cache_hits", _kernel.C_HITS), ("factorizations", _kernel.C_FACT),
+                        ("updates", _kernel.C_UPD)):
+            self.totals[name] += int(d[k])
+            self._counters[name] += int(d[k])
+        if not ok:
+            return None
+        self._last_factor = _KERNEL
+        self._kernel_answer = (z, q, p)
+        return z
+
     def _remember(self, s, key):
         """Factorize (and cache) an accepted assignment the second time it is accepted.
 
@@ -188,7 +226,7 @@ class FactorCache:
         over consecutive steps, or the same step of the next period on the way to a steady
         cycle) is worth one LU so that later visits are plain cache hits.
         """
-        if key in self._cache or not np.any(s != STICK):
+        if key in self._cache or not np.any(s != STICK) or self._last_factor is _KERNEL:
             return
         count = self._accepted.get(key, 0) + 1
         if len(self._accepted) > 100000:
@@ -217,6 +255,11 @@ class FactorCache:
         non-zero entries are gathered (``K`` is symmetric: rows instead of strided columns).
         """
         n = self.n
+        if F is _KERNEL:
+            kz, kq, kp = self._kernel_answer
+            if kz is z:
+                return kq, kp
+            F = None
         if F is not None and F.krows is not None:
             r = z[F.free] @ F.krows
         else:

@@ -59,7 +59,7 @@ MAX_UPDATES = 32
 #: ``UPDATE_COST * (4 m^2 r + r^3) < m_t^3``, the flops of a fresh inverse (``2 m_t^3``) with
 #: LAPACK's better speed per flop counted in ``UPDATE_COST``.
 UPDATE_COST = 1.0
-UPDATE_MIN_SIZE = 48
+UPDATE_MIN_SIZE = 8
 
 __all__ = ["march", "HAVE_KERNEL"]
 

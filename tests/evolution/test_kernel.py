@@ -249,3 +249,33 @@ def test_runs_sharing_a_solver_equal_independent_runs():
         b = sd.solve_cycles(s, load, 1.0, initial_slip=v0, solver=StepSolver(s), **kw)
         assert_same_run(a, b, s)
     assert shared.kernel_cache.counters[kernel.C_HITS] > 0
+
+
+@pytest.mark.parametrize("case", ["one_node", "uncoupled", "frictionless", "zero_load",
+                                  "stiff_contrast"])
+def test_kernel_extremes_equal_python(case):
+    """Extremes: one node, B = 0, friction 0, no load at all, stiffness ratios 1e6 between
+    nodes; the compiled periods give the Python step's runs."""
+    rng = np.random.default_rng(21)
+    n = 1 if case == "one_node" else 8
+    s = coupled(rng, n)
+    if case == "uncoupled":
+        s = sd.DiscreteSystem(s.A, np.zeros((n, n)), s.C, friction=0.4)
+    elif case == "frictionless":
+        s = sd.DiscreteSystem(s.A, s.B, s.C, friction=0.0)
+    elif case == "stiff_contrast":
+        d = np.diag(np.repeat(10.0 ** np.arange(-3, 3, 6 / n), 1)[:n])
+        D = np.block([[d, np.zeros((n, n))], [np.zeros((n, n)), d]]) ** 0.5
+        K = D @ s.K @ D
+        s = sd.DiscreteSystem(K[:n, :n], K[:n, n:], K[n:, n:], friction=s.friction)
+    load = load_of(rng, s)
+    if case == "zero_load":
+        load = sd.LoadCycle.from_harmonics(np.zeros(n), np.zeros(n), q_cos=np.zeros(n))
+    kw = dict(steps_per_cycle=24, max_cycles=60, tol=1e-10)
+    fast = StepSolver(s)
+    a = sd.solve_cycles(s, load, 1.0, solver=fast, **kw)
+    b = sd.solve_cycles(s, load, 1.0, solver=StepSolver(s, kernel=False), **kw)
+    assert a.status == "periodic"
+    assert_same_run(a, b, s)
+    if case == "zero_load":
+        assert a.shook_down and a.steady_dissipation == 0.0
