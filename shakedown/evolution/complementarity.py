@@ -46,6 +46,7 @@ from scipy.linalg import get_lapack_funcs
 
 from ..model.errors import InputError, ShapeError
 from ..model.system import DiscreteSystem
+from ..model.threads import single_blas_thread
 from ..model.validation import check_node_vector
 from .active_set import ActiveSet
 from .factors import FactorCache
@@ -350,4 +351,5 @@ def solve_step(system: DiscreteSystem, v_prev, q_w, p_w, guess=None, *, solver=N
         solver = get_solver(system, **options)
     elif solver.system is not system:
         raise InputError("solver was built for another system; pass solver=None")
-    return solver.solve(v_prev, q_w, p_w, g)
+    with single_blas_thread():  # small solves: see shakedown/model/threads.py
+        return solver.solve(v_prev, q_w, p_w, g)

@@ -18,6 +18,7 @@ import numpy as np
 from ..model.errors import InputError
 from ..model.loading import LoadCycle
 from ..model.system import DiscreteSystem
+from ..model.threads import single_blas_thread
 from ..model.validation import check_count, check_load_factor, check_same_nodes
 from .complementarity import (
     FEAS_TOL,
@@ -141,8 +142,9 @@ def solve_cycles(system: DiscreteSystem, load: LoadCycle, lam: float, initial_sl
         solver = StepSolver(system) if feas_tol is None else StepSolver(system, feas_tol=feas_tol)
     elif solver.system is not system:
         raise InputError("solver was built for another system; pass solver=None")
-    runs = run_states(system, solver, load, lam, V0, W0, method, n_steps, max_cycles, tol,
-                      progress=progress, record_history=record_history)
+    with single_blas_thread():  # many small solves: see shakedown/model/threads.py
+        runs = run_states(system, solver, load, lam, V0, W0, method, n_steps, max_cycles, tol,
+                          progress=progress, record_history=record_history)
     return runs if batch else runs[0]
 
 

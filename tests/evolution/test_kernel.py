@@ -12,6 +12,8 @@ import sys
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 import shakedown as sd
 from shakedown.evolution import fast_period, kernel, kernel_cache, kernel_updates
@@ -279,3 +281,19 @@ def test_kernel_extremes_equal_python(case):
     assert_same_run(a, b, s)
     if case == "zero_load":
         assert a.shook_down and a.steady_dissipation == 0.0
+
+
+@settings(max_examples=25, deadline=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@given(seed=st.integers(0, 10**6), n=st.integers(1, 14), lam=st.floats(0.0, 4.0),
+       fraction=st.floats(0.05, 0.95), p_mean=st.floats(-0.2, 1.5))
+def test_kernel_equals_python_property(seed, n, lam, fraction, p_mean):
+    """Random coupled systems, loads (tensile mean normal loads included: separation) and load
+    factors: the compiled periods and the Python step give the same run."""
+    rng = np.random.default_rng(seed)
+    s = coupled(rng, n, fraction=fraction)
+    load = load_of(rng, s, amp=3.0, p_mean=p_mean, p_amp=0.8)
+    kw = dict(steps_per_cycle=16, max_cycles=40, tol=1e-10)
+    a = sd.solve_cycles(s, load, lam, solver=StepSolver(s), **kw)
+    b = sd.solve_cycles(s, load, lam, solver=StepSolver(s, kernel=False), **kw)
+    assert_same_run(a, b, s)
