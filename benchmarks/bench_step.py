@@ -279,7 +279,30 @@ def worker_siconos_problems(a):
              p=np.array([r.p for r in res]), dv=np.array([r.slip_increment for r in res]),
              w=np.array([r.gap for r in res]), scale=np.array([r.force_scale for r in res]),
              diag=np.diag(s.K))
-    return dict(per_step=ts)
+    out = dict(per_step=ts)
+    try:  # the same 64 steps by the compiled period loop (this code only)
+        from shakedown.evolution import fast_period
+        from shakedown.model.threads import single_blas_thread
+    except ImportError:
+        return out
+    if fast_period.usable(solver):
+        arr = [np.zeros((65, n)) for _ in range(4)]
+        st, act = np.zeros((65, n), np.int8), np.zeros((64, n), np.int8)
+        sc, rs = np.zeros(64), np.zeros(64)
+
+        def period():
+            fast_period.run_period(solver, qg, pg, V[0], acts[-1], *arr, st, act, sc, rs, {})
+
+        tk = []
+        with single_blas_thread():
+            for _ in range(3):
+                t = time.perf_counter()
+                period()
+                tk.append((time.perf_counter() - t) / 64)
+        q = np.array([r.q for r in res])
+        out.update(per_step_kernel=tk, kernel_dq=float(
+            np.max(np.abs(arr[2][1:] - q) / np.array([r.force_scale for r in res])[:, None])))
+    return out
 
 
 WORKERS = dict(steps=worker_steps, events=worker_events, rows=worker_rows, warm=worker_warm,
@@ -455,7 +478,13 @@ def part_siconos(lines):
                   f"| Siconos FC2D NSGS (tol 1e-14, warm start, driver call only) | "
                   f"{1e6 * med(ts):.0f} | {med(ts) / med(ours['per_step']):.1f}x |",
                   f"| this code (StepSolver.solve, warm guess, full verification) | "
-                  f"{1e6 * med(ours['per_step']):.0f} | 1 |", "",
+                  f"{1e6 * med(ours['per_step']):.0f} | 1 |",
+                  *([f"| this code, the compiled period loop (the same 64 steps, as "
+                     f"solve_cycles runs them) | {1e6 * med(ours['per_step_kernel']):.1f} | "
+                     f"{med(ours['per_step_kernel']) / med(ours['per_step']):.2f}; Siconos / "
+                     f"this {med(ts) / med(ours['per_step_kernel']):.0f}x; its q differ from "
+                     f"StepSolver.solve's by {ours['kernel_dq']:.1e} of the force scale |"]
+                    if "per_step_kernel" in ours else []), "",
                   f"Siconos converged on {int(np.sum(o['info'] == 0))}/64 steps, "
                   f"{float(np.median(o['iters'])):.0f} NSGS sweeps (median). Largest "
                   f"difference of p, q (/ force scale) and of slips (x K_jj / force scale): "
