@@ -7,13 +7,16 @@ Python bookkeeping.  Each state assignment's reduced matrix ``M_s`` (rows ``q_j 
 the slipping nodes, ``q_j``, ``p_j`` of the separated ones; columns their slips and gaps) is
 kept as its explicit inverse in a bounded cache keyed by the assignment, so that a step whose
 assignment was met before costs one matrix-vector product with ``M_s^-1`` (``2 m^2`` flops, as
-a pair of triangular solves) and one with the ``m`` rows of ``K``; a new assignment within a
-few nodes of a cached one is reached by rank-one updates of that inverse (a row changed,
-a row and column added or removed: ``O(m^2)`` each) and otherwise inverted afresh
-(LAPACK through numpy); :mod:`.kernel_cache` holds both.  A fresh inverse is accepted only
-when its 1-norm condition number is below ``1e12``; every solve must satisfy its equations to
-``1e-3 feas_tol`` (relative): an updated inverse that fails is recomputed afresh, a fresh one
-that fails hands the step back.
+a pair of triangular solves) and one with the ``m`` rows of ``K``; a new assignment near the
+last solved one is reached by block updates of that inverse (:mod:`.kernel_updates`: unknowns
+removed, row coefficients changed, unknowns appended, ``O(m^2 r)`` for ``r`` changes, chosen
+when a flop count says they are cheaper than inverting afresh) and otherwise inverted afresh
+(LAPACK through numpy); :mod:`.kernel_cache` holds the inverses.  Every solve must satisfy
+its equations to ``1e-3 feas_tol`` (relative) and a fresh inverse must have a 1-norm
+condition number below ``1e12``: an updated inverse that fails is recomputed afresh; an
+ill-conditioned assignment, whose explicit inverse is not backward stable, is solved once by
+LU with partial pivoting (not cached, and verified like the Python step's LU answers: by the
+sign checks and residuals below); a singular one hands the step back.
 
 What the kernel does not do, it hands back: a step whose iteration repeats an assignment twice,
 exhausts its budget or meets a singular matrix returns to Python at that step, where
@@ -43,6 +46,7 @@ from .kernel_cache import (
     _lookup,
     _matrix,
     _slot,
+    _solve_lu,
     _solve_with,
     _store,
 )
@@ -64,15 +68,15 @@ UPDATE_MIN_SIZE = 8
 __all__ = ["march", "HAVE_KERNEL"]
 
 # counter indices
-C_ITER, C_HITS, C_FACT, C_UPD, C_STEPS = 0, 1, 2, 3, 4
+C_ITER, C_HITS, C_FACT, C_UPD, C_STEPS, C_LU = 0, 1, 2, 3, 4, 5
 
 
 @njit(cache=True)
 def _solve_set(s, K, f, q0, p0, n, ft, mult, keys, hashes, offs, sizes, pool, ipool, fpool,
                meta, counters, z, q, p):
-    """Solve assignment ``s`` into ``z, q, p``: a cached inverse, else rank-one updates of the
-    last solved assignment's inverse, else a fresh inverse.  False when the matrix is singular
-    or the solved equations fail their check."""
+    """Solve assignment ``s`` into ``z, q, p``: a cached inverse, else block updates of the
+    last solved assignment's inverse, else a fresh inverse, else (ill-conditioned) one LU
+    solve.  False when the matrix is singular or the solved equations fail their check."""
     any_free = False
     for j in range(n):
         if s[j] != STICK:
@@ -109,10 +113,17 @@ def _solve_set(s, K, f, q0, p0, n, ft, mult, keys, hashes, offs, sizes, pool, ip
                            pool, ipool, fpool, meta)
                     return True
     free, coef = _layout(s, f, n)
-    X, ok = _invert(_matrix(K, free, coef, n))
+    M = _matrix(K, free, coef, n)
+    X, ok = _invert(M)
     counters[C_FACT] += 1
     if not ok or _solve_with(X, free, coef, K, q0, p0, n, z, q, p) > tol:
-        return False
+        # ill-conditioned: an explicit inverse is not backward stable, LU with partial
+        # pivoting is.  Solve this once by LU and keep nothing; as the Python step's LU, its
+        # answer is then verified by the sign checks, the complementarity residual and the
+        # period's equilibrium, not by the inverse's equation tolerance (a singular or
+        # non-finite answer returns False)
+        counters[C_LU] += 1
+        return np.isfinite(_solve_lu(M, free, coef, K, q0, p0, n, z, q, p))
     if k >= 0:  # a cached (updated) inverse that lost accuracy: replace it in its slot
         o, oi = offs[k, 0], offs[k, 1]
         m = free.size

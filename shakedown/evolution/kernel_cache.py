@@ -148,20 +148,21 @@ def _slot(k, offs, sizes, pool, ipool, fpool):
 
 
 @njit(cache=True)
-def _solve_with(X, free, coef, K, q0, p0, n, z, q, p):
-    """z = (dv, w) of the assignment with inverse X; q, p its reactions; returns the largest
-    equation residual (force units)."""
+def _rhs(free, coef, q0, p0, n):
+    """Right-hand side of the assignment's equations at base reactions ``(q0, p0)``."""
     m = free.size
     h = np.empty(m)
     for i in range(m):
         r = free[i]
         h[i] = -(q0[r] + coef[i] * p0[r]) if r < n else -p0[r - n]
-    x = np.zeros(m)
-    for i in range(m):
-        acc = 0.0
-        for k in range(m):
-            acc += X[i, k] * h[k]
-        x[i] = acc
+    return h
+
+
+@njit(cache=True)
+def _apply(x, free, coef, K, q0, p0, n, z, q, p):
+    """``z`` from the free unknowns ``x``, its reactions ``q, p``; returns the largest
+    equation residual (force units)."""
+    m = free.size
     z[:] = 0.0
     q[:] = q0
     p[:] = p0
@@ -178,3 +179,29 @@ def _solve_with(X, free, coef, K, q0, p0, n, z, q, p):
         e = abs(q[r] + coef[i] * p[r]) if r < n else abs(p[r - n])
         err = max(err, e)
     return err
+
+
+@njit(cache=True)
+def _solve_with(X, free, coef, K, q0, p0, n, z, q, p):
+    """z = (dv, w) of the assignment with inverse X; q, p its reactions; returns the largest
+    equation residual (force units)."""
+    m = free.size
+    h = _rhs(free, coef, q0, p0, n)
+    x = np.zeros(m)
+    for i in range(m):
+        acc = 0.0
+        for k in range(m):
+            acc += X[i, k] * h[k]
+        x[i] = acc
+    return _apply(x, free, coef, K, q0, p0, n, z, q, p)
+
+
+@njit(cache=True)
+def _solve_lu(M, free, coef, K, q0, p0, n, z, q, p):
+    """The backward-stable solve (LAPACK gesv) of an assignment whose inverse is not accurate
+    enough; the equation residual, or ``inf`` when ``M`` is singular."""
+    try:
+        x = np.linalg.solve(M, _rhs(free, coef, q0, p0, n))
+    except Exception:  # noqa: BLE001 - numba raises a generic error for a singular matrix
+        return np.inf
+    return _apply(x, free, coef, K, q0, p0, n, z, q, p)

@@ -214,6 +214,7 @@ def _implicit_cycles(solver, c, tracks, qw, pw, load, lam):
     if fast_period.usable(solver):  # each state's period by the compiled kernel
         res = np.zeros(n_steps)
         for i, tr in enumerate(tracks):
+            res[:] = 0.0
             Wd[i], guesses[i], failed = fast_period.run_period(
                 solver, qw, pw, V[i, 0], guesses[i], V[i], Wg[i], Q[i], P[i], st[i], act[i],
                 scales[i], res, tr.statuses)

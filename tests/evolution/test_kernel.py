@@ -297,3 +297,28 @@ def test_kernel_equals_python_property(seed, n, lam, fraction, p_mean):
     a = sd.solve_cycles(s, load, lam, solver=StepSolver(s), **kw)
     b = sd.solve_cycles(s, load, lam, solver=StepSolver(s, kernel=False), **kw)
     assert_same_run(a, b, s)
+
+
+def test_ill_conditioned_assignments_fall_back_to_lu():
+    """cond(K) = 1e8: many assignment systems are too ill-conditioned for an explicit inverse
+    (not backward stable); the kernel solves them by LU, and the run matches the Python
+    step's (LU throughout): same status, no Lemke, every step verified, the same dissipation
+    per period to the accuracy this conditioning allows (cond * eps = 1e-8, amplified by the
+    slips: measured 2e-6 relative; 1e-5 asserted)."""
+    rng = np.random.default_rng(18)
+    n = 10
+    Qm, _ = np.linalg.qr(rng.normal(size=(2 * n, 2 * n)))
+    K = (Qm * np.logspace(0, -8, 2 * n)) @ Qm.T
+    K = 0.5 * (K + K.T)
+    s = sd.DiscreteSystem(K[:n, :n], K[:n, n:], K[n:, n:], friction=1.0)
+    s = s.with_friction(0.5 * min(s.critical_friction().value, 2.0))
+    load = load_of(rng, s, amp=1e-3, p_mean=1e-3, p_amp=1e-4)
+    kw = dict(steps_per_cycle=24, max_cycles=10, tol=1e-10)
+    fast = StepSolver(s)
+    a = sd.solve_cycles(s, load, 1.0, solver=fast, **kw)
+    b = sd.solve_cycles(s, load, 1.0, solver=StepSolver(s, kernel=False), **kw)
+    assert fast.kernel_cache.counters[kernel.C_LU] > 0  # the LU fallback was needed
+    assert a.status == b.status == "not_converged"
+    assert a.statistics["lemke_calls"] == b.statistics["lemke_calls"] == 0
+    assert a.max_residual <= 10 * FEAS_TOL and b.max_residual <= 10 * FEAS_TOL
+    np.testing.assert_allclose(a.dissipation, b.dissipation, rtol=1e-5)
