@@ -23,7 +23,10 @@ class KernelCache:
 
     def __init__(self, n: int, cache_bytes: float, max_iter: int):
         self.n = n
-        n_doubles = max(int(cache_bytes // 8), 4 * n * n)
+        # room for 128 of the largest inverses ((2N)^2 numbers each; typical ones are 16x
+        # smaller) within the budget, and always for one: a small system does not reserve
+        # the whole budget
+        n_doubles = max(min(int(cache_bytes // 8), 128 * (2 * n) ** 2), (2 * n) ** 2)
         self.pool = np.empty(n_doubles)  # pages are touched only as inverses are stored
         slots = int(min(4096, max(64, n_doubles // max(n, 1))))
         self.keys = np.zeros((slots, n), np.int8)
