@@ -156,7 +156,10 @@ def worker_warm(a):
     from shakedown.evolution.complementarity import StepSolver
 
     s, load, _ = load_problem(a.pkl)
-    solver = StepSolver(s)
+    try:  # the Python step with its own LU cache (this code: the compiled loop is timed below)
+        solver = StepSolver(s, kernel=False)
+    except TypeError:  # the baseline has no kernel option
+        solver = StepSolver(s)
     run = sd.solve_cycles(s, load, a.lam, max_cycles=200, solver=solver, record_history=True,
                           **KW)
     n = s.n_nodes
