@@ -81,7 +81,7 @@ class FacetWalk:
         d = np.abs(np.diag(lu[0]))
         if not d.size or not d.min() > 1e-12 * d.max():
             return False
-        self.Binv = sla.lu_solve(lu, np.eye(self.n), check_finite=False)
+        self.Binv = np.ascontiguousarray(sla.lu_solve(lu, np.eye(self.n), check_finite=False))
         self.reinversions += 1
         self.x = self.Binv @ self.b[self.T]
         self.inb = np.zeros(self.R, bool)
@@ -108,11 +108,18 @@ class FacetWalk:
         """Walk towards row ``k``: ``True`` (a certified vertex has ``k`` tight), ``False``
         (optimum of ``max G_k v`` with ``k`` slack: the face is empty), or ``None`` (``cap``
         pivots without a decision, or a vertex failed its check)."""
-        g = self.G[k]
+        return self._walk(self.G[k], k, cap)
+
+    def maximise(self, g, cap: int) -> bool:
+        """Primal simplex for ``max g.v`` from the current vertex: ``True`` at a certified
+        optimal vertex (basis ``T``), ``False`` otherwise (cap, unbounded, failed check)."""
+        return self._walk(np.asarray(g, float), -1, cap) is False and not self.broken
+
+    def _walk(self, g, k, cap):
         for it in range(cap + 1):
             if self.broken:
                 return None
-            if self.covered[k]:
+            if k >= 0 and self.covered[k]:
                 return True
             y = self.Binv.T @ g
             r = int(np.argmin(y))
@@ -120,13 +127,13 @@ class FacetWalk:
             if optimal or it == cap:
                 if not self._certify():
                     return None
-                return True if self.covered[k] else (False if optimal else None)
+                return True if k >= 0 and self.covered[k] else (False if optimal else None)
             d = -self.Binv[:, r]  # G_T d = -e_r: row T_r loosens, the others stay tight
             GX = self.G @ np.column_stack([self.x, d])  # one pass over G: check x, price d
             before = self.reinversions
             if not self._certify(GX[:, 0]):
                 return None
-            if self.covered[k]:
+            if k >= 0 and self.covered[k]:
                 return True
             if self.reinversions != before:  # the check re-inverted: price again
                 continue
@@ -141,7 +148,8 @@ class FacetWalk:
             step = float(ratio[p])
             w = self.G[p] @ self.Binv
             w[r] -= 1.0
-            self.Binv -= np.outer(d / Gd[p], w)
+            # Binv -= (d / Gd_p) w^T, in place (BLAS rank-1 update on the transposed view)
+            self.Binv = sla.blas.dger(-1.0 / Gd[p], w, d, a=self.Binv.T, overwrite_a=True).T
             self.x = self.x + step * d
             self.inb[self.T[r]] = False
             self.inb[p] = True

@@ -34,7 +34,7 @@ from .facet_walk import FacetWalk, certified_rows, vertex_rows
 from .outcome import value
 
 #: Exact "max lam" LPs solved first (rows of largest slack at the lam2 optimum).
-INIT_LPS = 32
+INIT_LPS = 16
 #: Pivots a walk may spend on one target before it goes to an exact LP.
 WALK_CAP = 60
 #: Undecided rows solved together by capped LPs.
@@ -122,7 +122,7 @@ class _Pruner:
             if not self.take(rows[g], ans, cap=t):
                 failed.append(rows[g])
 
-        dense_lp.batch_dual_simplex(tab, [(k,) for k in rows], max_pivots=self.n // 2 + 50,
+        dense_lp.batch_dual_simplex(tab, [(k,) for k in rows], max_pivots=2 * self.n + 50,
                                     on_answer=on_answer,
                                     skip=lambda g: self.lower[rows[g]] >= t)
         return failed
