@@ -158,6 +158,74 @@ class FacetWalk:
         return None
 
 
+    def descend(self, k: int, c, m, lam: float, max_steps: int):
+        """Exact ``lam_high_k`` below ``lam`` by a parametric dual simplex (rows ``G v <= c +
+        lam m``; the walker's offsets are ``c + lam m``), from an optimum of ``max G_k v`` at
+        which row ``k`` is slack (face ``k`` empty at ``lam``, as :meth:`walk_to` returns
+        ``False``).  ``lam`` decreases; at each breakpoint a row that would be violated enters
+        (dual ratio test keeps the multipliers ``y >= 0``), until row ``k`` is tight.
+
+        Returns the new ``lam`` (the walker is then at a certified vertex of ``H(lam)`` with
+        ``k`` tight) or ``None``.  Certificate, both checked here: the point (face ``k``
+        non-empty at ``lam``) and the multipliers ``y >= 0``, ``G_T^T y = G_k``, whose bound
+        ``G_k v <= y.(c_T + l m_T)`` on ``H(l)`` for every ``l`` stays below ``c_k + l m_k``
+        for ``l > lam`` (face ``k`` empty above ``lam``)."""
+        G, g = self.G, self.G[k]
+        for _ in range(max_steps):
+            y = self.Binv.T @ g
+            ys = max(float(np.abs(y).max()), 1e-300)
+            if y.min() < -1e-9 * ys:
+                return None
+            x = self.Binv @ (c[self.T] + lam * m[self.T])
+            dx = self.Binv @ m[self.T]
+            GX = G @ np.column_stack([x, dx])
+            sl = c + lam * m - GX[:, 0]
+            ds = m - GX[:, 1]  # s(lam - tau) = sl - tau ds
+            cand = ~self.inb & (ds > STEP_TOL)
+            cand[k] = False
+            tau = np.where(cand, np.maximum(sl, 0.0) / np.where(cand, ds, 1.0), np.inf)
+            p = int(np.argmin(tau))
+            tau_k = max(float(sl[k]), 0.0) / ds[k] if ds[k] > STEP_TOL else np.inf
+            if tau_k <= tau[p]:
+                return self._land(k, c, m, lam - tau_k, x - tau_k * dx, y)
+            if not np.isfinite(tau[p]) or tau[p] > lam:
+                return None
+            lam -= float(tau[p])
+            alpha = G[p] @ self.Binv
+            ok = alpha > STEP_TOL
+            if not ok.any():
+                return None
+            ratio = np.where(ok, np.maximum(y, 0.0) / np.where(ok, alpha, 1.0), np.inf)
+            tmin = ratio.min()
+            near = ok & (ratio <= tmin + 1e-12 * (1.0 + tmin))
+            r = int(np.argmax(np.where(near, alpha, -np.inf)))
+            w = alpha.copy()
+            w[r] -= 1.0
+            self.Binv = sla.blas.dger(-1.0 / alpha[r], w, self.Binv[:, r].copy(),
+                                      a=self.Binv.T, overwrite_a=True).T
+            self.inb[self.T[r]] = False
+            self.inb[p] = True
+            self.T[r] = p
+            self.pivots += 1
+        return None
+
+    def _land(self, k, c, m, lam, x, y):
+        """Check the descent's end point and dual bound; move the walker to ``H(lam)``."""
+        if lam < 0:
+            return None
+        T = self.T
+        stat = np.abs(self.G[T].T @ y - self.G[k]).max() / max(float(np.abs(y).max()), 1.0)
+        slope = float(y @ m[T] - m[k])
+        gap = float(y @ (c[T] + lam * m[T]) - (c[k] + lam * m[k]))  # U(lam) >= 0
+        if stat > 1e-9 or not slope < 0 or -gap / slope > 1e-10 * max(1.0, lam):
+            return None
+        self.b = c + lam * m
+        self.x = x
+        self.covered = np.zeros(self.R, bool)
+        if not self._certify() or not self.covered[k]:
+            return None
+        return lam
+
 def vertex_rows(G, m, basis, keep):
     """``N`` rows of an ``(N+1)``-row optimal basis of a ``(v, lam)`` LP (rows ``[G, -m]``) that
     define a vertex of ``H`` at the optimum's ``lam``: drop the row with the largest component of

@@ -37,8 +37,12 @@ from .outcome import value
 INIT_LPS = 16
 #: Pivots a walk may spend on one target before it goes to an exact LP.
 WALK_CAP = 60
+#: Pivots a walk may go on with when the first ``WALK_CAP`` did not decide.
+LONG_WALK_CAP = 400
 #: Undecided rows solved together by capped LPs.
 BATCH = 8
+#: Breakpoints a parametric descent may pass before its row goes to an exact LP.
+DESCENT_CAP = 400
 
 
 class _Pruner:
@@ -102,6 +106,8 @@ class _Pruner:
     # ---------------------------------------------------------------- walk
     def open(self, todo):
         val, k, ans = self.best
+        if ans is None:
+            return None
         T = vertex_rows(self.G, self.m, ans.basis[ans.basis < self.R], keep=k)
         if T is None:
             return None
@@ -132,18 +138,20 @@ class _Pruner:
         slack = self.tab.b[:R] - self.tab.A[:R] @ self.best[2].x
         order = [k for k in np.argsort(-slack, kind="stable") if not self.exact[k]]
         self.exact_lps(order[:INIT_LPS])
+        walk, t = None, np.inf
         while True:
-            t = self.best[0]
-            todo = ~self.exact & (self.lower < t)
-            if not todo.any():
-                return
-            if t <= 0.0:
-                self.lower[todo] = np.maximum(self.lower[todo], 0.0)
-                return
-            walk = self.open(todo)
-            if walk is None:
-                self.exact_lps(np.flatnonzero(todo))
-                return
+            if walk is None or self.best[0] < t:
+                t = self.best[0]
+                todo = ~self.exact & (self.lower < t)
+                if not todo.any():
+                    return
+                if t <= 0.0:
+                    self.lower[todo] = np.maximum(self.lower[todo], 0.0)
+                    return
+                walk = self.open(todo)
+                if walk is None:
+                    self.exact_lps(np.flatnonzero(todo))
+                    return
             pending = []
             while True:
                 self.lower[walk.covered] = np.maximum(self.lower[walk.covered], t)
@@ -152,15 +160,34 @@ class _Pruner:
                 left = np.flatnonzero(todo)
                 if left.size and len(pending) < BATCH:
                     k = int(left[np.argmin(walk.s[left])])
-                    if walk.walk_to(k, WALK_CAP) is not True:
+                    res = walk.walk_to(k, WALK_CAP)
+                    if res is None and not walk.broken:  # undecided: go on to a decision
+                        res = walk.walk_to(k, LONG_WALK_CAP)
+                    if res is False:  # face k empty at t: follow lam down to lam_high_k
+                        lam = walk.descend(k, self.c, self.m, t, DESCENT_CAP)
+                        if lam is not None:
+                            self.hi[k], self.exact[k] = min(lam, self.lam2), True
+                            self.best = (lam, k, None)
+                            t = lam  # the walk is at a vertex of H(lam) with k tight
+                            pending = []
+                            continue
+                        walk = None  # the walker's state is no longer usable
+                        pending.append(k)
+                        break
+                    if res is not True:
                         pending.append(k)
                     continue
-                if not pending:
+                break
+            if not pending:
+                if walk is not None:
                     return
-                self.exact_lps(self.capped_lps(walk, t, pending))
-                if self.best[0] < t:
-                    break  # lower incumbent: walk again from its vertex
-                pending = []
+                continue
+            if walk is None:  # reopen at the incumbent's optimum, then decide the rest
+                self.exact_lps(pending)
+                continue
+            self.exact_lps(self.capped_lps(walk, t, pending))
+            if self.best[0] < t:
+                walk = None
 
 
 def lam_high_pruned(cs, A, b, tab, main, book):

@@ -217,3 +217,39 @@ def test_breaking_the_certificate_check_is_caught(monkeypatch):
                         lambda G, b, x, tol=0, Gx=None: np.ones(len(b), bool))
     bad = sd.shakedown_bounds(model.system, load)
     assert bad.lam1 != pytest.approx(good.lam1, rel=1e-6)
+
+
+def test_every_descent_lands_on_the_exact_lam_high(monkeypatch):
+    """The parametric descents (face empty at the incumbent: follow lam down) end exactly at
+    the row's lam_high of the full computation; a perturbed dual certificate is rejected."""
+    monkeypatch.setattr(pruning, "INIT_LPS", 1)
+    cracks = cn.sample_crack_set(120, density=0.1, half_length=1.0, min_spacing=0.1,
+                                 rng=np.random.default_rng(2))
+    model = cn.kachanov_model(cracks, shear_modulus=1.0, poisson_ratio=0.25, friction=0.6)
+    load = model.load_cycle(static=(-1.0, 0.0, -1.0), cyclic=(0.0, 1.0, 0.0))
+    seen, rejected = [], []
+    orig, land = FacetWalk.descend, FacetWalk._land
+
+    def descend(self, k, c, m, lam, cap):
+        out = orig(self, k, c, m, lam, cap)
+        seen.append((k, out))
+        return out
+
+    def wrong_land(self, k, c, m, lam, x, y):
+        rejected.append(land(self, k, c, m, lam, x, 1.01 * y + 1e-3) is None)
+        return land(self, k, c, m, lam, x, y)
+
+    monkeypatch.setattr(FacetWalk, "descend", descend)
+    monkeypatch.setattr(FacetWalk, "_land", wrong_land)
+    fast = sd.shakedown_bounds(model.system, load)
+    full = sd.shakedown_bounds(model.system, load, intervals=True)
+    done = [(k, lam) for k, lam in seen if lam is not None]
+    assert done and all(rejected)
+    from shakedown.bounds.constraints import Scales
+
+    scale = Scales.of(full.constraints).load_factor  # descents work nondimensionally
+    for k, lam in done:
+        assert fast.lam_high_exact[k]
+        assert lam * scale == pytest.approx(full.lam_high[k], rel=1e-9)
+    assert fast.lam1 == pytest.approx(full.lam1, rel=SAME)
+
