@@ -284,6 +284,25 @@ def test_n600_certified():
     assert np.all(b.lam_low == 0.0)
 
 
+def test_kachanov_400_default_equals_exact_intervals():
+    """The default-run stand-in for the large networks (issue 14): 400 cracks, where the
+    pruned default path decides most rows without an LP; lam1 and its limiting row equal those
+    of the full interval computation, and every answer is certified."""
+    import crack_networks as cn
+
+    cracks = cn.sample_crack_set(400, density=0.1, half_length=1.0, min_spacing=0.1,
+                                 rng=np.random.default_rng(1))
+    model = cn.kachanov_model(cracks, shear_modulus=1.0, poisson_ratio=0.25, friction=0.6)
+    load = model.load_cycle(static=(-1.0, 0.0, -1.0), cyclic=(0.0, 1.0, 0.0))
+    b = shakedown_bounds(model.system, load)
+    full = shakedown_bounds(model.system, load, intervals=True, separation=False)
+    assert b.lam1 == pytest.approx(full.lam1, rel=1e-9) and b.lam2 == full.lam2
+    assert b.limiting_constraint == full.limiting_constraint
+    assert b.n_lps < full.n_lps and not b.lam_high_exact.all()
+    assert max(b.residuals.values()) <= 1e-7
+    check_certificate(b)
+
+
 @pytest.mark.slow
 def test_n2000_finishes():
     system, load = random_problem(2000, 0)
