@@ -37,14 +37,18 @@ for variant, label in LABELS.items():
         label += f"\n(slope {slope:.2f} from N={n[-2]:.0f} to {n[-1]:.0f})"
     line, = ax.loglog(n, t, "o-", label=label)
     axm.loglog(n, mem, "o-", color=line.get_color(), label=variant)
-ax.axhline(5.0, color="0.6", ls=":", lw=1)
-ax.axhline(120.0, color="0.6", ls=":", lw=1)
+for y, text in ((5.0, "5 s (N = 500 target)"), (120.0, "2 min (N = 2000 target)")):
+    ax.axhline(y, color="0.6", ls=":", lw=1)
+    ax.text(0.02, y, text, transform=ax.get_yaxis_transform(), fontsize=7, color="0.4",
+            va="bottom")
 ax.set_xlabel("N (cracks)")
 ax.set_ylabel("seconds (median of alternating runs)")
 ax.set_title("shakedown_bounds, default options, Kachanov networks", fontsize=10)
 ax.grid(True, which="both", alpha=0.3)
 ax.legend(fontsize=7)
 axm.axhline(2048.0, color="0.6", ls=":", lw=1)
+axm.text(0.02, 2048.0, "2 GB (N = 2000 target)", transform=axm.get_yaxis_transform(),
+         fontsize=7, color="0.4", va="bottom")
 axm.set_xlabel("N (cracks)")
 axm.set_ylabel("peak RSS of the worker [MB] (Kachanov model included)")
 axm.grid(True, which="both", alpha=0.3)
