@@ -1,11 +1,14 @@
 """Bounds with the default options on Kachanov crack networks: time and memory against N,
-today's code side by side with the code before issue 14 (commit af73457) and with HiGHS.
+today's code side by side with a baseline commit (``--base``) and with HiGHS.
 
 Usage (from the repository root)::
 
-    git worktree add /tmp/bounds-base af73457          # the baseline, once
+    git worktree add /tmp/bounds-b450 b450214          # the baseline, once
     OPENBLAS_NUM_THREADS=1 python benchmarks/bench_bounds_scaling.py \\
-        --sizes 100 200 500 --repeats 3 --base /tmp/bounds-base [--highs 100 200] [--plot]
+        --sizes 100 200 500 --repeats 3 --base /tmp/bounds-b450 --variants new base \\
+        [--highs 100 200] --out benchmarks/bounds_scaling_pruned_small.json
+
+(The first sections of RESULTS_bounds_scaling.md used ``--base /tmp/bounds-base`` = af73457.)
 
 Each measurement runs in a fresh subprocess (``--worker``) with ``PYTHONPATH`` pointing at the
 code under test, so both versions see the same machine load in the same run; the variants of
@@ -18,8 +21,11 @@ one size alternate, and the median over ``--repeats`` is reported.  The network:
 * ``new``: this checkout, default options (``lam1``, ``lam2``, activity intervals, separation
   check, safe state; ``lam_adj`` is opt-in since issue 14);
 * ``new+adj``: this checkout with ``adjacency=True``;
-* ``base``: commit af73457, its default options (which included the ``N`` adjacency LPs);
-* ``base-noadj``: commit af73457 with ``adjacency=False`` (the same quantities as ``new``);
+* ``new-exact``: this checkout with ``intervals=True`` (every activity interval exactly: the
+  default before the pruning of issue 14);
+* ``base``: the baseline commit with its default options (af73457: with the ``N`` adjacency
+  LPs; b450214: without them, every interval exactly);
+* ``base-noadj``: the baseline with ``adjacency=False``;
 * ``highs``: this checkout, ``solver="highs"`` (every LP by HiGHS), default options.
 
 Peak memory: the worker's peak resident set size (``ru_maxrss``), which includes the
@@ -58,12 +64,16 @@ def worker(n: int, variant: str) -> dict:
         kw["adjacency"] = False
     if variant == "highs":
         kw["solver"] = "highs"
+    if variant == "new-exact":
+        kw["intervals"] = True
     bounds = sd.shakedown_bounds  # import the analysis before the clock starts
     t = time.perf_counter()
     b = bounds(model.system, load, **kw)
     sec = time.perf_counter() - t
     return dict(n=n, variant=variant, seconds=sec, lam1=float(b.lam1), lam2=float(b.lam2),
                 lam_adj=float(b.lam_adj), n_lps=int(b.n_lps), iterations=int(b.simplex_iterations),
+                limiting=int(b.limiting_constraint),
+                n_exact=int(getattr(b, "lam_high_exact", np.ones(0, bool)).sum()),
                 residual=float(max(b.residuals.values())),
                 peak_rss_mb=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)
 
@@ -87,7 +97,7 @@ def main():
     ap.add_argument("--worker", nargs=2)
     ap.add_argument("--sizes", type=int, nargs="+", default=[100, 200, 500])
     ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--base", default="/tmp/bounds-base")
+    ap.add_argument("--base", default="/tmp/bounds-b450")
     ap.add_argument("--variants", nargs="+", default=["new", "new+adj", "base", "base-noadj"])
     ap.add_argument("--highs", type=int, nargs="*", default=[], help="sizes also run by HiGHS")
     ap.add_argument("--timeout", type=float, default=900.0)
@@ -96,7 +106,7 @@ def main():
     if args.worker:
         print(json.dumps(worker(int(args.worker[0]), args.worker[1])))
         return
-    print("uptime:", os.popen("uptime").read().strip(), flush=True)
+    print("loadavg:", Path("/proc/loadavg").read_text().strip(), flush=True)
     rows = []
     for n in args.sizes:
         variants = list(args.variants) + (["highs"] if n in args.highs else [])
@@ -109,9 +119,10 @@ def main():
             row = dict(rs[-1])
             row["seconds"] = statistics.median(secs)
             row["all_seconds"] = secs
+            row["loadavg"] = Path("/proc/loadavg").read_text().split()[:3]
             rows.append(row)
             print(json.dumps(row), flush=True)
-    print("uptime:", os.popen("uptime").read().strip(), flush=True)
+    print("loadavg:", Path("/proc/loadavg").read_text().strip(), flush=True)
     Path(args.out).write_text(json.dumps(rows, indent=1))
 
 

@@ -1,7 +1,8 @@
-"""Plot of bench_bounds_scaling.py's results: seconds against N (log-log) with the slopes.
+"""Plot of bench_bounds_scaling.py's results: seconds and peak RSS against N (log-log), slopes.
 
-Usage: python benchmarks/plot_bounds_scaling.py benchmarks/bounds_scaling_*.json
-Writes benchmarks/bounds_scaling.png.
+Usage: python benchmarks/plot_bounds_scaling.py benchmarks/bounds_scaling_pruned_*.json
+Writes benchmarks/bounds_scaling.png.  Variant names as in the benchmark's docstring; the
+labels below describe the runs of RESULTS_bounds_scaling.md's newest section (baseline b450214).
 """
 
 import json
@@ -14,24 +15,44 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+LABELS = {
+    "new": "new default (intervals='lam1', pruned)",
+    "new-exact": "new, intervals=True (every interval)",
+    "base": "base b450214 default (every interval)",
+    "base-noadj": "base, adjacency=False",
+    "new+adj": "new, adjacency=True",
+    "highs": "solver='highs'",
+}
+
 rows = [r for f in sys.argv[1:] for r in json.loads(Path(f).read_text())]
-fig, ax = plt.subplots(figsize=(7, 4.5))
-for variant in ("new", "new+adj", "base", "base-noadj", "highs"):
-    pts = sorted((r["n"], r["seconds"]) for r in rows
+fig, (ax, axm) = plt.subplots(1, 2, figsize=(11, 4.5))
+for variant, label in LABELS.items():
+    pts = sorted((r["n"], r["seconds"], r.get("peak_rss_mb", np.nan)) for r in rows
                  if r["variant"] == variant and np.isfinite(r.get("seconds", np.nan)))
     if not pts:
         continue
-    n, t = np.array(pts, float).T
-    label = variant
+    n, t, mem = np.array(pts, float).T
     if len(n) >= 2:
         slope = np.polyfit(np.log(n[-2:]), np.log(t[-2:]), 1)[0]
-        label += f" (slope {slope:.2f} from N={n[-2]:.0f} to {n[-1]:.0f})"
-    ax.loglog(n, t, "o-", label=label)
+        label += f"\n(slope {slope:.2f} from N={n[-2]:.0f} to {n[-1]:.0f})"
+    line, = ax.loglog(n, t, "o-", label=label)
+    axm.loglog(n, mem, "o-", color=line.get_color(), label=variant)
+for y, text in ((5.0, "5 s (N = 500 target)"), (120.0, "2 min (N = 2000 target)")):
+    ax.axhline(y, color="0.6", ls=":", lw=1)
+    ax.text(0.02, y, text, transform=ax.get_yaxis_transform(), fontsize=7, color="0.4",
+            va="bottom")
 ax.set_xlabel("N (cracks)")
-ax.set_ylabel("seconds (median)")
-ax.set_title("shakedown_bounds on Kachanov networks")
+ax.set_ylabel("seconds (median of alternating runs)")
+ax.set_title("shakedown_bounds, default options, Kachanov networks", fontsize=10)
 ax.grid(True, which="both", alpha=0.3)
-ax.legend(fontsize=8)
+ax.legend(fontsize=7)
+axm.axhline(2048.0, color="0.6", ls=":", lw=1)
+axm.text(0.02, 2048.0, "2 GB (N = 2000 target)", transform=axm.get_yaxis_transform(),
+         fontsize=7, color="0.4", va="bottom")
+axm.set_xlabel("N (cracks)")
+axm.set_ylabel("peak RSS of the worker [MB] (Kachanov model included)")
+axm.grid(True, which="both", alpha=0.3)
+axm.legend(fontsize=7)
 out = Path(__file__).parent / "bounds_scaling.png"
 fig.tight_layout()
 fig.savefig(out, dpi=120)

@@ -36,6 +36,20 @@ __all__ = [
 ]
 
 
+def _primal_finish(A, b, e, tab, cap=None):
+    """The optimal basis by primal simplex (:class:`~.facet_walk.FacetWalk`) from a basis that
+    is primal feasible but not dual feasible (a stalled interior point names the right face but
+    a slightly wrong basis); ``None`` if the start is not a certified feasible vertex or the walk
+    does not end at an optimum.  The caller certifies the answer again."""
+    from .facet_walk import FacetWalk
+
+    walk = FacetWalk(tab.A, tab.b, tab.T0)
+    if not walk.ok or not walk.maximise(e, cap or max(60, tab.n)):
+        return None
+    out = Tableau(A, b, e, np.sort(walk.T))
+    return out if not out.singular and out.dual_feasible else None
+
+
 def solve_max(A, b, e, *, max_iter=80):
     """``max e.x s.t. A x <= b``: interior point, basis identification, dual simplex clean-up.
 
@@ -53,6 +67,8 @@ def solve_max(A, b, e, *, max_iter=80):
         return None, None
     T = identify_basis(As, z, s, n)
     tab = Tableau(A, b, e, T) if T is not None else None
+    if tab is not None and not tab.singular and not tab.dual_feasible:
+        tab = _primal_finish(A, b, e, tab) or tab  # a few primal pivots from a feasible basis
     if tab is None or tab.singular or not tab.dual_feasible:
         # degenerate optimum (fewer than n strongly active rows): complete the active set so
         # that the multipliers stay non-negative, then let the dual simplex finish
@@ -65,7 +81,9 @@ def solve_max(A, b, e, *, max_iter=80):
             # multipliers that are zero up to the interior point's accuracy; the final
             # answer is certified again below, so this cannot pass a wrong optimum
             tab.y0 = np.maximum(tab.y0, 0.0)
-    if tab.singular or not tab.dual_feasible:
+    if tab is not None and not tab.singular and not tab.dual_feasible:
+        tab = _primal_finish(A, b, e, tab)
+    if tab is None or tab.singular or not tab.dual_feasible:
         return None, None
     ans = batch_dual_simplex(tab, [()])[0]
     if ans.status != "optimal":

@@ -22,6 +22,8 @@ from .certificates import CERT_TOL
 from .constraints import ConstraintSet
 from .highs_path import RESIDUAL_NAMES, HighsModel
 from .outcome import PathOutcome, lam1_from_intervals, separation_outcome, value
+from .pruning import lam_high_pruned
+from .result import LAM_RTOL
 
 
 class _Book:
@@ -122,20 +124,7 @@ def solve_dense(cs: ConstraintSet, intervals: bool, adjacency: bool,
     lamrow = 2 * n
     tab0 = _min_start(A, b, e, tab, lamrow, book) if (intervals or adjacency) else None
     if intervals:
-        hi = out.lam_high
-        hi[main.basis[main.basis < lamrow]] = lam2  # tight at the lam2 optimum
-        rest = [k for k in range(2 * n) if np.isnan(hi[k])]
-        hi[rest] = _family(tab, [(k,) for k in rest], "max", book, lamrow)
-        fin = np.isfinite(hi)
-        hi[fin] = np.minimum(hi[fin], lam2)
-        act = [k for k in range(2 * n) if np.isfinite(hi[k])]
-        if tab0 is not None:
-            lo = _family(tab0, [(k,) for k in act], "min", book, lamrow)
-        else:
-            lo = np.array([value(book.highs("min", (k,))) for k in act])
-        out.lam_low[act] = np.where(np.isnan(lo), lo, np.maximum(lo, 0.0))  # -0.0 -> 0.0
-        out.lam1, out.limiting = lam1_from_intervals(cs.labels(), out.lam_low, out.lam_high,
-                                                     lam2, out.messages)
+        _intervals(cs, A, b, e, tab, tab0, main, book, out, exact_all=intervals == "all")
     if adjacency:
         pairs = [(j, n + j) for j in range(n)]
         if tab0 is not None:
@@ -158,6 +147,49 @@ def solve_dense(cs: ConstraintSet, intervals: bool, adjacency: bool,
                 book.highs("max", separation=True), lam2, n)
     out.residuals, out.n_lps, out.iterations = book.worst, book.lps, book.iters
     return out
+
+
+def _intervals(cs, A, b, e, tab, tab0, main, book, out, exact_all):
+    """Activity intervals and ``lam1``.  ``exact_all``: every ``lam_high`` exactly (one LP per
+    row not shared); else ``lam_low`` first and, when every ``lam_low`` is 0, only what ``lam1``
+    needs (:mod:`.pruning`: exact ``lam_high`` for some rows, proven lower bounds elsewhere)."""
+    n = cs.n_nodes
+    lamrow = 2 * n
+    lam2 = out.lam2
+    hi = out.lam_high
+    if not exact_all:
+        rows = list(range(2 * n))
+        lo = _lows(tab0, rows, book, lamrow)
+        out.lam_low[:] = lo
+        tol = LAM_RTOL * max(1.0, lam2)  # as lam1_from_intervals reads "active at 0"
+        if np.all(lo <= tol):  # (False for nan: never active)
+            hi[:], out.hi_exact = lam_high_pruned(cs, A, b, tab, main, book)
+            out.lam1, out.limiting = lam1_from_intervals(
+                cs.labels(), out.lam_low, np.where(out.hi_exact, hi, np.inf), lam2,
+                out.messages)
+            return
+        # some constraint is not active at lam = 0 (lam1 = 0): every interval exactly
+    hi[main.basis[main.basis < lamrow]] = lam2  # tight at the lam2 optimum
+    rest = [k for k in range(2 * n) if np.isnan(hi[k])]
+    hi[rest] = _family(tab, [(k,) for k in rest], "max", book, lamrow)
+    fin = np.isfinite(hi)
+    hi[fin] = np.minimum(hi[fin], lam2)
+    act = [k for k in range(2 * n) if np.isfinite(hi[k])]
+    lo = np.full(2 * n, np.nan)
+    lo[act] = _lows(tab0, act, book, lamrow)
+    out.lam_low[:] = lo
+    out.hi_exact = np.ones(2 * n, bool)
+    out.lam1, out.limiting = lam1_from_intervals(cs.labels(), out.lam_low, out.lam_high,
+                                                 lam2, out.messages)
+
+
+def _lows(tab0, rows, book, lamrow):
+    """``lam_low`` of ``rows`` (``nan``: never active), ``-0.0`` read as 0."""
+    if tab0 is not None:
+        lo = _family(tab0, [(k,) for k in rows], "min", book, lamrow)
+    else:
+        lo = np.array([value(book.highs("min", (k,))) for k in rows])
+    return np.where(np.isnan(lo), lo, np.maximum(lo, 0.0))
 
 
 def _min_start(A, b, e, tab, lamrow, book):

@@ -51,7 +51,7 @@ def shakedown_bounds(
     load: LoadCycle,
     *,
     lam: float | None = None,
-    intervals: bool = True,
+    intervals: bool | str = "lam1",
     adjacency: bool = False,
     separation: bool = True,
     only=None,
@@ -67,8 +67,15 @@ def shakedown_bounds(
     lam : float, optional
         Load factor at which to return a safe slip state (the Chebyshev centre of ``H(lam)``).
         Default: ``lam1 / 2`` (or 0 when ``lam1`` is 0 or not finite).
-    intervals : bool
-        Compute the activity interval of every constraint (``4N`` LPs; needed for ``lam1``).
+    intervals : {"lam1", True, "all", False}
+        What to compute of the activity intervals ``[lam_low_k, lam_high_k]`` of the ``2N``
+        constraints (``lam1`` needs them).  ``"lam1"`` (default, issue 14): every ``lam_low``
+        exactly and ``lam_high`` only as far as ``lam1`` needs it -- exact for the rows marked in
+        ``lam_high_exact``, elsewhere a proven lower bound that is ``>= lam1`` (the constraint is
+        active at least up to that value; see :mod:`shakedown.bounds.pruning`); ``lam1``,
+        ``lam2`` and the certificates are the same as with ``"all"``.  ``True`` or ``"all"``:
+        every interval exactly (up to ``4N`` LPs, ``O(N^4)`` on large crack networks).
+        ``False``: none (``lam1`` is ``nan``).
     adjacency : bool
         Compute ``lam_adj`` (``N`` LPs).  Off by default (issue 14): each adjacency LP walks
         from a vertex of ``H(0)`` up to ``lam_adj``, ``O(N)`` simplex pivots of ``O(N^2)`` each,
@@ -111,6 +118,7 @@ def shakedown_bounds(
         lam = _check_lam(lam)
     if only is not None:
         intervals, adjacency, separation = _only(only)
+    intervals = _intervals_option(intervals)
     sc = Scales.of(cs)
     ch = sc.nondimensional(cs)
     out = None
@@ -145,6 +153,8 @@ def shakedown_bounds(
         limiting_constraint=int(out.limiting),
         lam_low=out.lam_low * lf,
         lam_high=out.lam_high * lf,
+        lam_high_exact=(np.zeros(2 * cs.n_nodes, bool) if out.hi_exact is None
+                        else np.asarray(out.hi_exact, bool)),
         lam_separation=float(lam_sep),
         separation_nodes=tuple(out.sep_nodes),
         safe_lam=float(safe_lam),
@@ -171,7 +181,19 @@ def _only(only):
     if bad:
         raise InputError(
             f"only: unknown quantity {bad[0]!r}; choose from {', '.join(QUANTITIES)}")
-    return "lam1" in wanted, "lam_adj" in wanted, "lam_separation" in wanted
+    return ("lam1" if "lam1" in wanted else False), "lam_adj" in wanted, \
+        "lam_separation" in wanted
+
+
+def _intervals_option(intervals):
+    """``"lam1"``, ``"all"`` or ``False`` from the ``intervals=`` argument."""
+    if intervals is True or intervals == "all":
+        return "all"
+    if intervals is False or intervals is None:
+        return False
+    if intervals == "lam1":
+        return "lam1"
+    raise InputError(f"intervals must be 'lam1', True ('all') or False; got {intervals!r}")
 
 
 def chebyshev_centre(cs: ConstraintSet, lam: float, *, solver: str = "auto"):

@@ -116,6 +116,7 @@ def solve_highs(cs: ConstraintSet, has_periodic_part: bool, intervals: bool, adj
             if np.isnan(out.lam_high[k]):
                 continue  # never active
             out.lam_low[k] = value(eng.run("min", tight=(k,)))
+        out.hi_exact = np.ones(2 * n, bool)
         out.lam1, out.limiting = lam1_from_intervals(cs.labels(), out.lam_low, out.lam_high, lam2,
                                                      messages)
     if adjacency and status != "infeasible":

@@ -28,6 +28,7 @@ class PathOutcome:
     lam_high: np.ndarray
     v_at_lam2: np.ndarray
     certificate: np.ndarray
+    hi_exact: np.ndarray | None = None
     lam_adj: float = np.nan
     adj_node: int = -1
     limiting: int = -1

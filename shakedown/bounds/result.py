@@ -41,7 +41,13 @@ class ShakedownBounds:
         Index ``k`` (``0..2N-1``) of the constraint that becomes inactive at ``lam1``
         (``-1`` if none); ``limiting_label`` names it (``"I_j"`` / ``"II_j"``).
     lam_low, lam_high : ndarray, shape (2N,)
-        Activity interval of every extreme constraint (``nan`` if never active).
+        Activity interval of every extreme constraint (``nan`` if never active or not
+        computed).  ``lam_low`` is exact.  ``lam_high[k]`` is exact where ``lam_high_exact[k]``;
+        elsewhere (default ``intervals="lam1"``) it is a proven lower bound, ``>= lam1``: the
+        constraint is active at least on ``[lam_low[k], lam_high[k]]``, possibly beyond.
+    lam_high_exact : ndarray of bool, shape (2N,)
+        Which ``lam_high`` entries are exact (all ``True`` with ``intervals=True`` /
+        ``"all"`` or ``solver="highs"``; all ``False`` when intervals were not computed).
     lam_separation : float
         Largest ``lam`` for which a safe state with ``p_w(t) + B^T v >= 0`` at every node and
         time exists; above it (up to ``lam2``) every safe state needs a tensile normal reaction
@@ -80,6 +86,7 @@ class ShakedownBounds:
     limiting_constraint: int
     lam_low: np.ndarray
     lam_high: np.ndarray
+    lam_high_exact: np.ndarray
     lam_separation: float
     separation_nodes: tuple
     safe_lam: float
@@ -98,12 +105,27 @@ class ShakedownBounds:
         return self.constraints.n_nodes
 
     @property
+    def intervals_computed(self) -> str:
+        """``"exact"`` (every activity interval exact), ``"lam1"`` (``lam_high`` exact only where
+        ``lam1`` needs it, proven lower bounds elsewhere) or ``"none"`` (not computed)."""
+        if self.lam_high_exact.size and self.lam_high_exact.all():
+            return "exact"
+        if np.isnan(self.lam_high).all() and not self.lam_high_exact.any():
+            return "none"
+        return "lam1"
+
+    @property
     def limiting_label(self) -> str:
         k = self.limiting_constraint
         return self.constraints.labels()[k] if k >= 0 else ""
 
     def active_at(self, lam: float) -> np.ndarray:
-        """Boolean mask (2N,) of the constraints active at ``lam``."""
+        """Boolean mask (2N,) of the constraints active at ``lam``.
+
+        Exact where ``lam_high_exact``; elsewhere ``lam_high`` is a lower bound (default
+        ``intervals="lam1"``), so above ``lam1`` the mask may miss constraints that are still
+        active (it never includes an inactive one).  Use ``intervals=True`` for exact counts.
+        """
         tol = LAM_RTOL * max(1.0, abs(lam))
         with np.errstate(invalid="ignore"):
             return (self.lam_low <= lam + tol) & (lam - tol <= self.lam_high)
@@ -121,6 +143,7 @@ class ShakedownBounds:
                 "slip_direction": ["backward"] * n + ["forward"] * n,
                 "lam_low": self.lam_low,
                 "lam_high": self.lam_high,
+                "lam_high_exact": self.lam_high_exact,
                 "t_extreme": self.constraints.t_extreme,
                 "offset_c": self.constraints.c,
                 "offset_rate_m": self.constraints.m,
@@ -145,6 +168,7 @@ class ShakedownBounds:
             "adjacency_node": int(self.adjacency_node) + 1 if self.adjacency_node >= 0 else None,
             "limiting_constraint": self.limiting_label,
             "lam_separation": num(self.lam_separation),
+            "intervals": self.intervals_computed,
             "separation_nodes": [int(j) + 1 for j in self.separation_nodes],
             "safe_lam": num(self.safe_lam),
             "safe_state": [float(x) for x in self.safe_state],

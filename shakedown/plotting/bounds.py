@@ -127,7 +127,9 @@ def region_curve(system, load, lams):
 def plot_region_vs_lam(bounds: ShakedownBounds, *, system=None, load=None, lams=None, ax=None):
     """Active-constraint count (and, for two nodes, the safe-region area) against ``lam``.
 
-    The count uses the activity intervals of ``bounds``; ``lam1`` and ``lam2`` are marked.
+    The count uses the activity intervals of ``bounds``; ``lam1`` and ``lam2`` are marked.  With
+    the default ``intervals="lam1"`` some upper ends are only lower bounds, so above ``lam1`` the
+    count is a lower bound (the legend says so); ``intervals=True`` gives the exact count.
     Pass ``system`` and ``load`` to add the area curve (two-node systems).
 
     Returns
@@ -143,7 +145,11 @@ def plot_region_vs_lam(bounds: ShakedownBounds, *, system=None, load=None, lams=
     lams = np.asarray(lams, float)
     count = np.array([bounds.active_at(x).sum() if (not np.isfinite(bounds.lam2) or
                       x <= bounds.lam2) else 0 for x in lams])
-    ax.step(lams, count, where="post", color="tab:blue", label="active extreme constraints")
+    label = "active extreme constraints"
+    if not bounds.lam_high_exact.all() and np.isfinite(bounds.lam1):
+        # intervals="lam1": above lam1 some upper ends are lower bounds, so is the count
+        label += r" (a lower bound above $\lambda_1$)"
+    ax.step(lams, count, where="post", color="tab:blue", label=label)
     ax.set_xlabel(r"load factor $\lambda$")
     ax.set_ylabel(f"active constraints (of {2 * bounds.n_nodes})", color="tab:blue")
     ax.set_ylim(-0.2, 2 * bounds.n_nodes + 0.5)

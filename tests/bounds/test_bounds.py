@@ -75,7 +75,7 @@ def check_certificate(b):
 @pytest.mark.parametrize("seed", range(6))
 def test_vertex_enumeration(n, seed):
     system, load = random_problem(n, seed, coupling=0.5)
-    b = shakedown_bounds(system, load)
+    b = shakedown_bounds(system, load, intervals=True)
     lam2, lo, hi = brute_force(b.constraints)
     assert b.lam2 == pytest.approx(lam2, rel=1e-8)
     np.testing.assert_allclose(b.lam_high, hi, rtol=1e-8, atol=1e-12)
@@ -87,7 +87,7 @@ def test_vertex_enumeration(n, seed):
 def test_against_cvxpy(seed):
     cp = pytest.importorskip("cvxpy")
     system, load = random_problem(6, seed, harmonics=2)
-    b = shakedown_bounds(system, load, adjacency=False)
+    b = shakedown_bounds(system, load, adjacency=False, intervals=True)
     cs = extreme_constraints(system, load)
     n = cs.n_nodes
 
@@ -109,7 +109,7 @@ def test_against_cvxpy(seed):
 @pytest.mark.parametrize("n,seed", [(4, 0), (12, 1), (40, 2)])
 def test_auto_agrees_with_highs(n, seed):
     system, load = random_problem(n, seed)
-    a = shakedown_bounds(system, load, adjacency=True)
+    a = shakedown_bounds(system, load, adjacency=True, intervals=True)
     h = shakedown_bounds(system, load, solver="highs", adjacency=True)
     assert a.status == h.status == "bounded"
     for name in ("lam1", "lam2", "lam_adj", "lam_separation", "safe_margin"):
@@ -136,8 +136,8 @@ def test_permutation_invariance():
     perm = np.random.default_rng(0).permutation(7)
     ix = np.ix_(perm, perm)
     s2 = sd.DiscreteSystem(system.A[ix], system.B[ix], system.C[ix], system.friction[perm])
-    b1 = shakedown_bounds(system, load, adjacency=True)
-    b2 = shakedown_bounds(s2, load.permuted(perm), adjacency=True)
+    b1 = shakedown_bounds(system, load, adjacency=True, intervals=True)
+    b2 = shakedown_bounds(s2, load.permuted(perm), adjacency=True, intervals=True)
     assert b2.lam1 == pytest.approx(b1.lam1, rel=1e-9)
     assert b2.lam2 == pytest.approx(b1.lam2, rel=1e-9)
     assert b2.lam_adj == pytest.approx(b1.lam_adj, rel=1e-9)
@@ -284,6 +284,25 @@ def test_n600_certified():
     assert np.all(b.lam_low == 0.0)
 
 
+def test_kachanov_400_default_equals_exact_intervals():
+    """The default-run stand-in for the large networks (issue 14): 400 cracks, where the
+    pruned default path decides most rows without an LP; lam1 and its limiting row equal those
+    of the full interval computation, and every answer is certified."""
+    import crack_networks as cn
+
+    cracks = cn.sample_crack_set(400, density=0.1, half_length=1.0, min_spacing=0.1,
+                                 rng=np.random.default_rng(1))
+    model = cn.kachanov_model(cracks, shear_modulus=1.0, poisson_ratio=0.25, friction=0.6)
+    load = model.load_cycle(static=(-1.0, 0.0, -1.0), cyclic=(0.0, 1.0, 0.0))
+    b = shakedown_bounds(model.system, load)
+    full = shakedown_bounds(model.system, load, intervals=True, separation=False)
+    assert b.lam1 == pytest.approx(full.lam1, rel=1e-9) and b.lam2 == full.lam2
+    assert b.limiting_constraint == full.limiting_constraint
+    assert b.n_lps < full.n_lps and not b.lam_high_exact.all()
+    assert max(b.residuals.values()) <= 1e-7
+    check_certificate(b)
+
+
 @pytest.mark.slow
 def test_n2000_finishes():
     system, load = random_problem(2000, 0)
@@ -379,7 +398,7 @@ def test_auto_agrees_with_highs_on_degenerate_systems(n, seed):
     meet, far fewer than N + 1 strongly active rows) and many interval LPs tie.  The fast path
     (with its shared answers) equals the reference path; 1e-6 = HiGHS's tolerance with margin."""
     system, load = _uncoupled(n, seed)
-    a = shakedown_bounds(system, load, adjacency=True)
+    a = shakedown_bounds(system, load, adjacency=True, intervals=True)
     h = shakedown_bounds(system, load, adjacency=True, solver="highs")
     assert a.status == h.status
     for name in ("lam1", "lam2", "lam_adj", "lam_separation"):

@@ -158,7 +158,7 @@ def test_extreme_constraints_match_the_definitions(seed, units):
 def test_lam2_and_activity_intervals_against_linprog_on_the_hand_assembly(n, seed):
     system, load, (q0, p0, qc, qs, pc, ps) = harmonic_problem(n, seed, 0.5)
     G, c, m = constraints_from_model(system, q0, p0, None, None, harmonic=(qc, qs, pc, ps))
-    b = sd.shakedown_bounds(system, load)
+    b = sd.shakedown_bounds(system, load, intervals=True)
     assert b.lam2 == pytest.approx(lp_lam(G, c, m, -1), rel=1e-6)
     hi = np.array([lp_lam(G, c, m, -1, k) for k in range(2 * n)])
     lo = np.array([lp_lam(G, c, m, +1, k) for k in range(2 * n)])

@@ -70,10 +70,10 @@ def test_issue_example_kachanov_in_other_units(solver):
 @given(stiffness=factors, force=factors, seed=st.integers(0, 20))
 def test_bounds_do_not_depend_on_units(stiffness, force, seed):
     system, load = random_problem(5, seed, coupling=0.5)
-    ref = shakedown_bounds(system, load, adjacency=True)
+    ref = shakedown_bounds(system, load, adjacency=True, intervals=True)
     scaled = sd.DiscreteSystem(stiffness * system.A, stiffness * system.B, stiffness * system.C,
                                system.friction)
-    b = shakedown_bounds(scaled, load.scaled(force), adjacency=True)
+    b = shakedown_bounds(scaled, load.scaled(force), adjacency=True, intervals=True)
     assert_same_bounds(b, ref, stiffness, force)
     # the safe state at a given lam is the same point in the new units
     lam = 0.3 * ref.lam2

@@ -2,7 +2,9 @@
 
 ``[analyses.bounds]`` runs :func:`shakedown.shakedown_bounds` and writes ``bounds.json`` (full
 precision), ``constraints.csv`` (the activity interval of each of the ``2N`` extreme
-constraints), ``bounds_vs_lam.png`` and, for two nodes, ``safe_region_<i>.png``.  Its result
+constraints; column ``lam_high_exact`` says where ``lam_high`` is exact and where it is a proven
+lower bound, see ``exact_intervals``), ``bounds_vs_lam.png`` and, for two nodes,
+``safe_region_<i>.png``.  Its result
 starts with a verdict in plain sentences (:func:`shakedown.bounds.verdict.bounds_verdict`).
 Nodes are numbered from 1 in every file and message (constraint ``I_1`` belongs to node 1).
 """
@@ -21,6 +23,9 @@ OPTIONS = {
     "plot_lams": (list, [], "load factors of the safe-region pictures (two-node systems; "
                             "empty: 0, the safe state's lam and (lam1 + lam2) / 2)"),
     "adjacency": (bool, True, "compute lam_adj (N more LPs)"),
+    "exact_intervals": (bool, False, "every activity interval exactly (default: lam_high exact "
+                                     "only where lam1 needs it, a proven lower bound elsewhere; "
+                                     "column lam_high_exact of constraints.csv)"),
     "plots": (bool, True, "write PNG plots"),
 }
 
@@ -48,7 +53,8 @@ def _table(b):
 def run(ctx, options: dict) -> dict:
     lam = options["lam"]
     b = shakedown_bounds(
-        ctx.system, ctx.load, lam=None if lam < 0 else lam, adjacency=options["adjacency"]
+        ctx.system, ctx.load, lam=None if lam < 0 else lam, adjacency=options["adjacency"],
+        intervals=True if options["exact_intervals"] else "lam1",
     )
     verdict = bounds_verdict(b, adjacency=options["adjacency"])
     d = _node_numbers(b, b.to_dict())

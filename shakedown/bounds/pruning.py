@@ -1,0 +1,202 @@
+"""``lam1`` without every ``lam_high``: incumbent pruning of the "max lam" LPs (issue 14).
+
+``lam1 = min_k lam_high_k`` once every ``lam_low_k = 0`` (:func:`~.outcome.lam1_from_intervals`);
+only the minimum is needed, not every ``lam_high_k``.  With an incumbent ``t >= lam1`` (the
+smallest exact ``lam_high`` found so far), a constraint whose face is non-empty at ``t`` has
+``lam_high_k >= t >= lam1`` (its interval is convex and contains 0) and needs no LP.  The
+driver :func:`lam_high_pruned`:
+
+1. solves exactly (batched dual simplex from the ``lam2`` basis) the rows tight at the ``lam2``
+   optimum (``lam_high = lam2``, free) and :data:`INIT_LPS` rows of largest slack there; the
+   smallest value is the first incumbent ``t``;
+2. walks over the vertices of ``H(t)`` (:class:`~.facet_walk.FacetWalk`, from the vertex of
+   the incumbent's optimum), each time towards the not yet decided row of least slack; every
+   certified vertex proves ``lam_high >= t`` for all its tight rows;
+3. a row the walk cannot reach (face empty at ``t``, or undecided after :data:`WALK_CAP`
+   pivots) gets an exact LP, ``max lam`` with the row tight and ``lam <= t`` (dual simplex from
+   the walk's vertex plus the row ``lam <= t``: dual feasible there), in batches of
+   :data:`BATCH`: a value below ``t`` is that row's exact ``lam_high`` (the cap is not binding)
+   and lowers the incumbent (the walk restarts from that optimum's vertex); a binding cap proves
+   ``lam_high >= t``.  An LP that fails is solved from the ``lam2`` basis, then by HiGHS.
+
+Every optimum of step 1 and 3 also proves ``lam_high_j >= value`` for each row ``j`` tight at
+it (checked by :func:`~.facet_walk.certified_rows`).  Result: per row either the exact
+``lam_high`` or a proven lower bound that is ``>=`` the final ``lam1``; ``lam1`` = the smallest
+exact value.  Anything that cannot be certified falls back to exact LPs for the rows left.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import dense_lp
+from .facet_walk import FacetWalk, certified_rows, vertex_rows
+from .outcome import value
+
+#: Exact "max lam" LPs solved first (rows of largest slack at the lam2 optimum).
+INIT_LPS = 16
+#: Pivots a walk may spend on one target before it goes to an exact LP.
+WALK_CAP = 60
+#: Pivots a walk may go on with when the first ``WALK_CAP`` did not decide.
+LONG_WALK_CAP = 400
+#: Undecided rows solved together by capped LPs.
+BATCH = 8
+#: Breakpoints a parametric descent may pass before its row goes to an exact LP.
+DESCENT_CAP = 400
+
+
+class _Pruner:
+    def __init__(self, cs, A, b, tab, main, book):
+        n = cs.n_nodes
+        self.n, self.R = n, 2 * n
+        self.A, self.b, self.tab, self.book = A, b, tab, book
+        gn = np.linalg.norm(cs.G, axis=1)
+        gn[gn == 0] = 1.0
+        self.G, self.c, self.m = cs.G / gn[:, None], cs.c / gn, cs.m / gn
+        self.lam2 = float(main.x[-1])
+        self.hi = np.full(self.R, np.nan)
+        self.exact = np.zeros(self.R, bool)
+        self.lower = np.full(self.R, -np.inf)
+        self.best = None  # (value, row, answer) of the smallest exact lam_high with a basis
+        self.take(None, main, lam2_answer=True)
+
+    # ---------------------------------------------------------------- answers
+    def take(self, k, ans, lam2_answer=False, cap=None):
+        """Record the answer of "max lam with row ``k`` tight" (``cap``: with ``lam <= cap``)."""
+        if not lam2_answer:
+            self.book.record(ans)
+        if ans.status != "optimal":
+            return False
+        lam = float(ans.x[-1])
+        T = np.asarray(ans.basis, int)
+        tight = certified_rows(self.tab.A, self.tab.b, ans.x[: self.n + 1])
+        if tight is None or (k is not None and not tight[k]):
+            return False
+        if cap is not None and (self.R + 1) in T:  # binding cap: a point of face k at lam = cap
+            cover = tight[: self.R]
+            self.lower[cover] = np.maximum(self.lower[cover], cap)
+            return True
+        val = min(lam, self.lam2)
+        if lam2_answer:
+            rows = T[T < self.R]
+            self.hi[rows], self.exact[rows] = self.lam2, True
+        else:
+            self.hi[k], self.exact[k] = val, True
+        cover = tight[: self.R]
+        self.lower[cover] = np.maximum(self.lower[cover], val)
+        if (self.R not in T and len(T[T < self.R]) == self.n + 1
+                and (self.best is None or val < self.best[0])):
+            self.best = (val, k if k is not None else int(T[0]), ans)
+        return True
+
+    def exact_lps(self, rows):
+        """Exact "max lam" LPs from the lam2 basis (HiGHS if not certified)."""
+        rows = [int(k) for k in rows]
+        failed = []
+
+        def on_answer(g, ans):
+            if not self.take(rows[g], ans):
+                failed.append(rows[g])
+
+        dense_lp.batch_dual_simplex(self.tab, [(k,) for k in rows], on_answer=on_answer,
+                                    skip=lambda g: self.exact[rows[g]])
+        for k in failed:
+            self.hi[k], self.exact[k] = min(value(self.book.highs("max", (k,))), self.lam2), True
+
+    # ---------------------------------------------------------------- walk
+    def open(self, todo):
+        val, k, ans = self.best
+        if ans is None:
+            return None
+        T = vertex_rows(self.G, self.m, ans.basis[ans.basis < self.R], keep=k)
+        if T is None:
+            return None
+        walk = FacetWalk(self.G, self.c + val * self.m, T)
+        return walk if walk.ok else None
+
+    def capped_lps(self, walk, t, rows):
+        """``max lam`` with row ``k`` tight and ``lam <= t`` from the walk's vertex."""
+        A = np.vstack([self.A, np.r_[np.zeros(self.n), 1.0][None, :]])
+        b = np.r_[self.b, t]
+        e = np.r_[np.zeros(self.n), 1.0]
+        tab = dense_lp.Tableau(A, b, e, np.r_[walk.T, self.R + 1])
+        if tab.singular or not tab.dual_feasible:
+            return list(rows)
+        failed = []
+
+        def on_answer(g, ans):
+            if not self.take(rows[g], ans, cap=t):
+                failed.append(rows[g])
+
+        dense_lp.batch_dual_simplex(tab, [(k,) for k in rows], max_pivots=2 * self.n + 50,
+                                    on_answer=on_answer,
+                                    skip=lambda g: self.lower[rows[g]] >= t)
+        return failed
+
+    def run(self):
+        R = self.R
+        slack = self.tab.b[:R] - self.tab.A[:R] @ self.best[2].x
+        order = [k for k in np.argsort(-slack, kind="stable") if not self.exact[k]]
+        self.exact_lps(order[:INIT_LPS])
+        walk, t = None, np.inf
+        while True:
+            if walk is None or self.best[0] < t:
+                t = self.best[0]
+                todo = ~self.exact & (self.lower < t)
+                if not todo.any():
+                    return
+                if t <= 0.0:
+                    self.lower[todo] = np.maximum(self.lower[todo], 0.0)
+                    return
+                walk = self.open(todo)
+                if walk is None:
+                    self.exact_lps(np.flatnonzero(todo))
+                    return
+            pending = []
+            while True:
+                self.lower[walk.covered] = np.maximum(self.lower[walk.covered], t)
+                todo = ~self.exact & (self.lower < t)
+                todo[pending] = False
+                left = np.flatnonzero(todo)
+                if left.size and len(pending) < BATCH:
+                    k = int(left[np.argmin(walk.s[left])])
+                    res = walk.walk_to(k, WALK_CAP)
+                    if res is None and not walk.broken:  # undecided: go on to a decision
+                        res = walk.walk_to(k, LONG_WALK_CAP)
+                    if res is False:  # face k empty at t: follow lam down to lam_high_k
+                        lam = walk.descend(k, self.c, self.m, t, DESCENT_CAP)
+                        if lam is not None:
+                            self.hi[k], self.exact[k] = min(lam, self.lam2), True
+                            self.best = (lam, k, None)
+                            t = lam  # the walk is at a vertex of H(lam) with k tight
+                            pending = []
+                            continue
+                        walk = None  # the walker's state is no longer usable
+                        pending.append(k)
+                        break
+                    if res is not True:
+                        pending.append(k)
+                    continue
+                break
+            if not pending:
+                if walk is not None:
+                    return
+                continue
+            if walk is None:  # reopen at the incumbent's optimum, then decide the rest
+                self.exact_lps(pending)
+                continue
+            self.exact_lps(self.capped_lps(walk, t, pending))
+            if self.best[0] < t:
+                walk = None
+
+
+def lam_high_pruned(cs, A, b, tab, main, book):
+    """Per row: the exact ``lam_high`` or a proven lower bound ``>= lam1`` (module docstring).
+
+    Returns ``(lam_high, exact)`` (nondimensional; ``exact[k]`` says which).  Requires every
+    ``lam_low`` to be 0 (the caller checks first).
+    """
+    p = _Pruner(cs, A, b, tab, main, book)
+    p.run()
+    hi = np.where(p.exact, p.hi, p.lower)
+    return np.minimum(hi, p.lam2), p.exact.copy()
