@@ -291,3 +291,14 @@ def test_fuzz_cli_subprocess(tmp_path, text):
     assert proc.returncode == 2, proc.stderr
     assert "Traceback" not in proc.stderr and "shakedown: error:" in proc.stderr
     assert files_outside(tmp_path, tmp_path / "shakedown-out") == []
+
+
+def test_fe_huge_modulus_is_refused_in_words():
+    """E = 1e308 (found by test_fuzz_fe): the material's positivity check no longer overflows,
+    and the assembly says that the stiffness overflows instead of a singular-matrix message
+    or numpy's LinAlgError."""
+    mat = sd.fe.isotropic(1e308, 0.0)
+    assert np.isfinite(mat.D).all()
+    mesh = sd.fe.rectangle(1.0, 1.0, 2, 2)
+    with pytest.raises(sd.InputError, match="stiffness matrix overflows"):
+        sd.fe.FEModel(mesh, mat, dirichlet=["top"], contact=["bottom"]).condense()

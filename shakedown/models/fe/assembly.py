@@ -291,7 +291,14 @@ class Body:
             ev = (f[0, 0], f[1, 1], 2 * f[0, 1])
             return sum(D[i, j] * eu[j] * ev[i] for i in range(3) for j in range(3))
 
-        return asm(form, self.basis).tocsr()
+        with np.errstate(over="ignore", invalid="ignore"):  # reported below, in words
+            K = asm(form, self.basis).tocsr()
+        if not np.all(np.isfinite(K.data)):
+            raise InputError(
+                f"the stiffness matrix overflows (material D up to {np.abs(D).max():.3g}, "
+                "times element geometry): the elastic constants are too large for floating "
+                "point; express them in larger stress units")
+        return K
 
     def mass(self):
         """Consistent mass matrix (sparse CSR) [mass]."""

@@ -48,14 +48,17 @@ class Material:
             raise InputError(f"D must be a finite (3, 3) array; got shape {D.shape}")
         if np.abs(D - D.T).max() > 1e-12 * np.abs(D).max():
             raise InputError("D must be symmetric")
-        if np.linalg.eigvalsh(0.5 * (D + D.T))[0] <= 0:
+        scale = np.abs(D).max()
+        Dn = 0.5 * (D / scale + D.T / scale) if scale > 0 else D  # no overflow near 1e308
+        if scale == 0 or np.linalg.eigvalsh(Dn)[0] <= 0:
             raise InputError(
                 f"the in-plane stiffness D of the {self.name} material is not positive "
-                f"definite (eigenvalues {np.linalg.eigvalsh(D)}); check the elastic constants"
+                f"definite (eigenvalues {scale * np.linalg.eigvalsh(Dn)}); check the elastic "
+                "constants"
             )
         if not (np.isfinite(self.density) and self.density > 0):
             raise InputError(f"density must be > 0; got {self.density!r}")
-        D = 0.5 * (D + D.T)
+        D = 0.5 * D + 0.5 * D.T
         D.setflags(write=False)
         object.__setattr__(self, "D", D)
 
