@@ -247,6 +247,7 @@ def kachanov_model(
     weighting: str = "uniform",
     validate: bool = True,
     interaction_radius: float | None = None,
+    sparse: bool | None = None,
 ) -> KachanovModel:
     """Build Kachanov's discrete model of a crack network.
 
@@ -271,9 +272,13 @@ def kachanov_model(
         friction raises here.
     interaction_radius : float, optional
         Truncate the interactions to pairs closer than ``interaction_radius * (a_i + a_j)``
-        (:func:`kachanov_stiffness`; uniform weighting only).  The model's ``K`` is then the
-        truncated matrix made dense (a :class:`shakedown.DiscreteSystem` is dense) and
-        :attr:`KachanovModel.transmission_factors` is None.
+        (:func:`kachanov_stiffness`; uniform weighting only).
+        :attr:`KachanovModel.transmission_factors` is then None.
+    sparse : bool, optional
+        Keep the truncated ``K`` sparse (CSR): the model's :attr:`~CrackNetworkModel.system`
+        is then a sparse :class:`shakedown.DiscreteSystem`, which the cyclic solver and the
+        bounds use without densifying.  Default: ``True`` with ``interaction_radius``;
+        ``False`` makes the truncated matrix dense (the full interaction is always dense).
 
     Returns
     -------
@@ -297,15 +302,21 @@ def kachanov_model(
             raise InputError("interaction_radius works with weighting='uniform' only; remove "
                              "one of them")
         Lam = None
-        K = kachanov_stiffness(cracks, mu, nu, interaction_radius=interaction_radius).toarray()
+        K = kachanov_stiffness(cracks, mu, nu, interaction_radius=interaction_radius)
+        if sparse is False:
+            K = K.toarray()
     else:
+        if sparse:
+            raise InputError("sparse=True needs interaction_radius (the full Kachanov "
+                             "interaction is dense); pass e.g. interaction_radius=12")
         if weighting == "uniform":
             Lam = transmission_factors(cracks)
         else:
             Lam = elliptic_transmission_factors(cracks)
         K = stiffness_from_factors(Lam, cracks.half_lengths, mu, nu)
         Lam.setflags(write=False)
-    K.setflags(write=False)
+    if isinstance(K, np.ndarray):
+        K.setflags(write=False)
     model = KachanovModel(
         cracks=cracks, shear_modulus=mu, poisson_ratio=nu, friction=friction,
         symmetric=bool(symmetric), stiffness_raw=K, transmission_factors=Lam,

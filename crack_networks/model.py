@@ -9,6 +9,8 @@ from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
 from shakedown.model.errors import InputError, NotPositiveDefiniteError
 from shakedown.model.loading import LoadCycle
@@ -101,9 +103,11 @@ class CrackNetworkModel:
     friction : float or ndarray, shape (N,)
     symmetric : bool
         Whether :attr:`system` uses ``(K + K^T) / 2`` (``True``) or requires ``K`` symmetric.
-    stiffness_raw : ndarray, shape (2N, 2N)
+    stiffness_raw : ndarray or scipy.sparse.csr_matrix, shape (2N, 2N)
         ``K`` before symmetrisation, interleaved per crack as ``(opening, slip)`` columns and
-        ``(P, Q)`` rows [force per unit thickness / length].
+        ``(P, Q)`` rows [force per unit thickness / length].  Sparse for a truncated
+        interaction (``kachanov_model(..., interaction_radius=r)``): then :attr:`system` is a
+        sparse :class:`~shakedown.DiscreteSystem` and nothing here densifies it.
     """
 
     cracks: CrackSet
@@ -134,8 +138,22 @@ class CrackNetworkModel:
         """``K`` used by :attr:`system` (symmetrised when ``symmetric``), shape (2N, 2N)."""
         K = self.stiffness_raw
         K = 0.5 * (K + K.T) if self.symmetric else K.copy()
-        K.setflags(write=False)
+        if not sp.issparse(K):
+            K.setflags(write=False)
         return K
+
+    @property
+    def is_sparse(self) -> bool:
+        """``True`` when the stiffness is a ``scipy.sparse`` matrix (truncated interaction)."""
+        return sp.issparse(self.stiffness_raw)
+
+    def _sparse_blocks(self, K):
+        """``(A, B, Bt, C)`` of a sparse interleaved ``K`` (CSR)."""
+        n = self.n_cracks
+        o, t = 2 * np.arange(n), 2 * np.arange(n) + 1  # opening / P, slip / Q
+        K = sp.csr_matrix(K)
+        Kt, Ko = K[t], K[o]
+        return (Kt[:, t].tocsr(), Kt[:, o].tocsr(), Ko[:, t].tocsr(), Ko[:, o].tocsr())
 
     def blocks(self, symmetric: bool | None = None):
         """``(A, B, Bt, C)`` of ``K``: ``q = A v + B w``, ``p = Bt v + C w`` (+ welded).
@@ -146,6 +164,8 @@ class CrackNetworkModel:
         sym = self.symmetric if symmetric is None else symmetric
         K = self.stiffness_raw
         K = 0.5 * (K + K.T) if sym else K
+        if sp.issparse(K):
+            return self._sparse_blocks(K)
         n = self.n_cracks
         K4 = K.reshape(n, 2, n, 2)
         return (
@@ -158,6 +178,8 @@ class CrackNetworkModel:
         """:class:`Asymmetry` of :attr:`stiffness_raw`."""
         n = self.n_cracks
         K = self.stiffness_raw
+        if sp.issparse(K):
+            return self._sparse_asymmetry(K)
         D = K - K.T
         rel = float(np.linalg.norm(D) / np.linalg.norm(K))
         D4 = np.abs(D.reshape(n, 2, n, 2)).max(axis=(1, 3))
@@ -171,10 +193,45 @@ class CrackNetworkModel:
         i, j = divmod(k, n)
         return Asymmetry(rel, float(D4[i, j] / self.self_stiffness), (i, j), pair)
 
+    def _sparse_asymmetry(self, K) -> Asymmetry:
+        """:class:`Asymmetry` of a sparse ``K`` (``pair`` is then a sparse (N, N) matrix)."""
+        n = self.n_cracks
+        D = (K - K.T).tocoo()
+        rel = float(spla.norm(D) / spla.norm(K)) if D.nnz else 0.0
+
+        def per_pair(M):  # max |entry| per crack pair, sparse (N, N)
+            M = sp.coo_matrix(M)
+            if not M.nnz:
+                return sp.csr_matrix((n, n))
+            keys = (M.row // 2).astype(np.int64) * n + M.col // 2
+            order = np.argsort(keys, kind="stable")
+            k, start = np.unique(keys[order], return_index=True)
+            mx = np.maximum.reduceat(np.abs(M.data[order]), start)
+            return sp.csr_matrix((mx, (k // n, k % n)), shape=(n, n))
+
+        D4 = per_pair(D)
+        D4.setdiag(0.0)
+        D4.eliminate_zeros()
+        if not D4.nnz:
+            return Asymmetry(rel, 0.0, (0, 0), D4)
+        M4 = per_pair(K)
+        scale = M4.maximum(M4.T).tocsr()
+        Dc = D4.tocoo()
+        pair = sp.csr_matrix((Dc.data / np.asarray(scale[Dc.row, Dc.col]).ravel(),
+                              (Dc.row, Dc.col)), shape=(n, n))
+        k = int(np.argmax(Dc.data))
+        i, j = int(Dc.row[k]), int(Dc.col[k])
+        return Asymmetry(rel, float(Dc.data[k] / self.self_stiffness), (i, j), pair)
+
     @cached_property
     def min_eigenvalue(self) -> float:
         """Smallest eigenvalue of ``(K + K^T) / 2`` [stress]."""
         K = self.stiffness_raw
+        if sp.issparse(K):
+            Ks = sp.csr_matrix(0.5 * (K + K.T))
+            if Ks.shape[0] <= 4:
+                return float(np.linalg.eigvalsh(Ks.toarray())[0])
+            return float(spla.eigsh(Ks, k=1, which="SA", return_eigenvectors=False)[0])
         return float(np.linalg.eigvalsh(0.5 * (K + K.T))[0])
 
     @cached_property
@@ -191,7 +248,6 @@ class CrackNetworkModel:
         # the blocks of blocks(symmetric=True), the same numbers, built one at a time from
         # the raw K (no symmetrised copy of all of K; DiscreteSystem copies them into its K)
         n = self.n_cracks
-        K4 = self.stiffness_raw.reshape(n, 2, n, 2)
 
         def sym(P, Q):
             out = P + Q.T
@@ -199,6 +255,10 @@ class CrackNetworkModel:
             return out
 
         try:
+            if self.is_sparse:  # a sparse system: K is never densified
+                A, B, _, C = self.blocks(symmetric=True)
+                return DiscreteSystem(A, B, C, self.friction)
+            K4 = self.stiffness_raw.reshape(n, 2, n, 2)
             return DiscreteSystem(sym(K4[:, 1, :, 1], K4[:, 1, :, 1]),
                                   sym(K4[:, 1, :, 0], K4[:, 0, :, 1]),
                                   sym(K4[:, 0, :, 0], K4[:, 0, :, 0]), self.friction)
@@ -259,4 +319,7 @@ class CrackNetworkModel:
         """
         q, p = self.welded_reactions(stress)
         r = np.stack([p, q], axis=-1).reshape(-1)
-        return np.linalg.solve(self.stiffness_raw, -r).reshape(-1, 2)
+        K = self.stiffness_raw
+        if sp.issparse(K):
+            return spla.spsolve(sp.csc_matrix(K), -r).reshape(-1, 2)
+        return np.linalg.solve(K, -r).reshape(-1, 2)

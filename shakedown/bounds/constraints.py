@@ -26,10 +26,12 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
+import scipy.sparse as sp
 
 from ..model import citations
 from ..model.errors import InputError, ShapeError
 from ..model.loading import LoadCycle
+from ..model.sparse import abs_max
 from ..model.system import DiscreteSystem
 
 
@@ -39,8 +41,8 @@ class ConstraintSet:
 
     Attributes
     ----------
-    G : ndarray, shape (2N, N)
-        Constraint normals [force / length].
+    G : ndarray or scipy.sparse.csr_matrix, shape (2N, N)
+        Constraint normals [force / length] (sparse for a sparse system).
     c : ndarray, shape (2N,)
         Offsets at ``lam = 0`` [force].
     m : ndarray, shape (2N,)
@@ -103,7 +105,7 @@ class Scales:
 
     @classmethod
     def of(cls, cs: ConstraintSet) -> Scales:
-        k = float(np.abs(cs.G).max(initial=0.0))
+        k = abs_max(cs.G)
         fc = float(np.abs(cs.c).max(initial=0.0))
         fm = float(np.abs(cs.m).max(initial=0.0))
         force = fc if fc > 0 else (fm if fm > 0 else 1.0)
@@ -124,15 +126,21 @@ def extreme_constraints(system: DiscreteSystem, load: LoadCycle) -> ConstraintSe
     """Assemble the extreme constraints of ``system`` under ``load`` (module docstring)."""
     _check_pair(system, load)
     A, B, f = system.A, system.B, system.friction
-    FBt = f[:, None] * B.T
-    G = np.vstack([A - FBt, -(A + FBt)])
+    if system.is_sparse:  # rows scaled by f: diag(f) B^T, all sparse
+        FBt = sp.diags(f) @ B.T
+        G = sp.vstack([A - FBt, -(A + FBt)], format="csr")
+        sep_G = sp.csr_matrix(-B.T)
+    else:
+        FBt = f[:, None] * B.T
+        G = np.vstack([A - FBt, -(A + FBt)])
+        sep_G = -B.T.copy()
     c = np.concatenate([f * load.p0 - load.q0, f * load.p0 + load.q0])
     mI, tI = load.periodic_min(-1.0, f)
     mII, tII = load.periodic_min(1.0, f)
     mp, _ = load.periodic_min(0.0, 1.0)
     return ConstraintSet(
         G=G, c=c, m=np.concatenate([mI, mII]), t_extreme=np.concatenate([tI, tII]),
-        sep_G=-B.T.copy(), sep_c=load.p0.copy(), sep_m=mp,
+        sep_G=sep_G, sep_c=load.p0.copy(), sep_m=mp,
     )
 
 

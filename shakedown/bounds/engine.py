@@ -22,6 +22,8 @@ from __future__ import annotations
 import time
 
 import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
 from ..model import citations
 from ..model.errors import InputError
@@ -92,7 +94,10 @@ def shakedown_bounds(
         lock-step dense dual simplex of :mod:`shakedown.bounds.dense_lp` warm-started from the
         optimal basis for the activity-interval and adjacency LPs; every answer is certified by
         its optimality conditions and any LP that is not certified is re-solved by HiGHS.
-        ``"highs"``: every LP by HiGHS (one model, warm starts): the reference.
+        ``"highs"``: every LP by HiGHS (one model, warm starts): the reference.  A sparse system
+        (``system.is_sparse``) always takes the HiGHS path on its sparse constraint matrix
+        (``intervals="lam1"``: shared vertices and incumbent pruning,
+        :mod:`shakedown.bounds.highs_pruning`); nothing is densified.
 
     Returns
     -------
@@ -122,7 +127,7 @@ def shakedown_bounds(
     sc = Scales.of(cs)
     ch = sc.nondimensional(cs)
     out = None
-    if solver == "auto":
+    if solver == "auto" and not system.is_sparse:
         out = solve_dense(ch, intervals, adjacency, separation)
     if out is None:
         out = solve_highs(ch, load.has_periodic_part, intervals, adjacency, separation)
@@ -213,9 +218,14 @@ def chebyshev_centre(cs: ConstraintSet, lam: float, *, solver: str = "auto"):
 def _chebyshev(cs: ConstraintSet, lam: float, solver: str):
     """Chebyshev centre of a nondimensional constraint set (see :func:`chebyshev_centre`)."""
     n = cs.n_nodes
-    norms = np.linalg.norm(cs.G, axis=1)
     b = cs.offsets(lam)
-    rows = np.hstack([cs.G, norms[:, None]])
+    if sp.issparse(cs.G):
+        norms = spla.norm(cs.G, axis=1)
+        rows = sp.hstack([cs.G, norms[:, None]], format="csc")
+        solver = "highs"
+    else:
+        norms = np.linalg.norm(cs.G, axis=1)
+        rows = np.hstack([cs.G, norms[:, None]])
     cap = 1e6 * max(1.0, np.abs(b).max(initial=0.0) / max(norms.min(initial=1.0), 1e-300))
     if solver == "auto":
         top = np.r_[np.zeros(n), 1.0]

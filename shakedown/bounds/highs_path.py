@@ -8,8 +8,10 @@ HiGHS's absolute tolerances (1e-7) are relative to the problem's own scales.
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sp
 
 from .constraints import ConstraintSet
+from .highs_pruning import intervals_pruned, tight_rows
 from .lp import LPAnswer, ReusableLP
 from .outcome import PathOutcome, lam1_from_intervals, separation_outcome, value
 
@@ -22,9 +24,13 @@ class HighsModel:
     def __init__(self, cs: ConstraintSet):
         n = cs.n_nodes
         self.n = n
-        rows = np.vstack(
-            [np.hstack([cs.G, -cs.m[:, None]]), np.hstack([cs.sep_G, -cs.sep_m[:, None]])]
-        )
+        if sp.issparse(cs.G):  # a sparse system: the model is built without densifying
+            rows = sp.bmat([[cs.G, -cs.m[:, None]], [cs.sep_G, -cs.sep_m[:, None]]],
+                           format="csc")
+        else:
+            rows = np.vstack(
+                [np.hstack([cs.G, -cs.m[:, None]]), np.hstack([cs.sep_G, -cs.sep_m[:, None]])]
+            )
         self.c = cs.c
         self.sep_c = cs.sep_c
         row_lo = np.full(3 * n, -np.inf)
@@ -36,10 +42,12 @@ class HighsModel:
         self.lp = ReusableLP(rows, row_lo, row_hi, col_lo, col_hi, cost)
         self.worst = dict.fromkeys(RESIDUAL_NAMES, 0.0)
 
-    def run(self, sense: str, tight=(), separation: bool = False) -> LPAnswer:
+    def run(self, sense: str, tight=(), separation: bool = False, cost=None) -> LPAnswer:
+        """Optimise ``lam`` (or ``cost . (v, lam)``) with rows ``tight`` held tight."""
         lp = self.lp
-        cost = np.zeros(self.n + 1)
-        cost[self.n] = 1.0
+        if cost is None:
+            cost = np.zeros(self.n + 1)
+            cost[self.n] = 1.0
         lp.set_objective(cost, sense)
         for k in tight:
             lp.set_row_bounds(k, self.c[k], self.c[k])
@@ -63,9 +71,13 @@ class HighsModel:
         return ans
 
 
-def solve_highs(cs: ConstraintSet, has_periodic_part: bool, intervals: bool, adjacency: bool,
+def solve_highs(cs: ConstraintSet, has_periodic_part: bool, intervals, adjacency: bool,
                 separation: bool) -> PathOutcome:
-    """Every LP by HiGHS (the reference path); ``cs`` nondimensional."""
+    """Every LP by HiGHS (the reference path); ``cs`` nondimensional.
+
+    On a dense constraint set (the reference path) every interval is computed exactly.  On a
+    sparse one, ``intervals="lam1"`` computes the intervals ``lam1`` needs, by covering LPs and
+    incumbent pruning (:mod:`.highs_pruning`); ``"all"`` / ``True``: every interval exactly."""
     n = cs.n_nodes
     eng = HighsModel(cs)
     scale_m = np.abs(cs.m).max(initial=0.0)
@@ -99,14 +111,20 @@ def solve_highs(cs: ConstraintSet, has_periodic_part: bool, intervals: bool, adj
     out = PathOutcome(lam1=np.nan, lam2=lam2, status=status, messages=messages,
                       lam_low=np.full(2 * n, np.nan), lam_high=np.full(2 * n, np.nan),
                       v_at_lam2=v_at_lam2, certificate=certificate)
-    if intervals and status != "infeasible":
+    pruned = None
+    if (intervals == "lam1" and sp.issparse(cs.G) and status == "bounded"
+            and main.status == "optimal"):
+        pruned = intervals_pruned(eng, cs, lam2, v_at_lam2)
+    if pruned is not None:
+        out.lam_low, out.lam_high, out.hi_exact = pruned
+        out.lam1, out.limiting = lam1_from_intervals(
+            cs.labels(), out.lam_low, np.where(out.hi_exact, out.lam_high, np.inf), lam2,
+            messages)
+    elif intervals and status != "infeasible":
+        tight_at_end = np.zeros(2 * n, bool)
         if main.status == "optimal":
             # constraints tight at the lam2 optimum are active up to lam2 (can't go higher)
-            slack = cs.c + lam2 * cs.m - cs.G @ v_at_lam2
-            rs = np.abs(cs.G).max(axis=1) * np.abs(v_at_lam2).max(initial=0.0) + np.abs(cs.c)
-            tight_at_end = slack <= 1e-9 * rs
-        else:
-            tight_at_end = np.zeros(2 * n, bool)
+            tight_at_end[tight_rows(cs, v_at_lam2, lam2)] = True
         for k in range(2 * n):
             if tight_at_end[k]:
                 out.lam_high[k] = lam2

@@ -106,6 +106,11 @@ class StepSolver(FactorCache, ActiveSet, Fallbacks):
         Let :func:`~shakedown.solve_cycles` march whole periods in the compiled kernel of
         :mod:`.kernel` (numba), handing back to :meth:`solve` only the steps it cannot finish
         (``False``: every step by :meth:`solve`; same answers to the solver tolerance).
+        Ignored for a sparse system (``system.is_sparse``): its steps factorize the
+        assignment systems as sparse matrices (SuperLU, cached per assignment like the dense
+        LU factors) and compute reactions by sparse products; ``K`` is never densified (only
+        the Lemke fallback, for steps the active set cannot finish, works on a dense
+        ``K^-1``).
     """
 
     def __init__(self, system: DiscreteSystem, *, feas_tol: float = FEAS_TOL,
@@ -121,11 +126,12 @@ class StepSolver(FactorCache, ActiveSet, Fallbacks):
         self.system = system
         n = self.n = system.n_nodes
         self.A, self.B, self.C = system.A, system.B, system.C
-        self.Bt = np.ascontiguousarray(system.B.T)
+        self.sparse = system.is_sparse
+        self.Bt = system.B.T.tocsr() if self.sparse else np.ascontiguousarray(system.B.T)
         self.f = np.asarray(system.friction, float)
         self.K = system.K
-        self.diag = np.concatenate([np.diag(self.A), np.diag(self.C)])
-        self._getrs = get_lapack_funcs("getrs", (self.K,))
+        self.diag = system.diagonal()
+        self._getrs = get_lapack_funcs("getrs", (self.diag,))
         self._last_factor = None
         self._all_allowed = np.ones((n, 4), bool)
         self._none_forced = np.zeros(n, bool)
@@ -140,7 +146,7 @@ class StepSolver(FactorCache, ActiveSet, Fallbacks):
         self.update_min_size = int(update_min_size)
         self.enumerate_max_nodes = int(enumerate_max_nodes)
         self.check_uniqueness = bool(check_uniqueness)
-        self.kernel = bool(kernel)
+        self.kernel = bool(kernel) and not self.sparse  # the kernel is dense
         self._cache: OrderedDict[bytes, _Factor] = OrderedDict()
         self._cache_used = 0
         self._base: _Factor | None = None
@@ -244,7 +250,7 @@ class StepSolver(FactorCache, ActiveSet, Fallbacks):
         sep = np.flatnonzero(gap)
         q0, p0 = q + dq_w, p + dp_w
         if sep.size:
-            r = gap[sep] @ self.K[n + sep]
+            r = self.K[n + sep].T @ gap[sep] if self.sparse else gap[sep] @ self.K[n + sep]
             q0 -= r[:n]
             p0 -= r[n:]
         return q0, p0

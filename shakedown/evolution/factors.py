@@ -12,6 +12,11 @@ assignment system is solved by the kernel's inverse cache and block updates inst
 (:meth:`FactorCache._kernel_solve`, :mod:`.kernel`): the Python step, the steps the period loop
 hands back, and the rate problems of the event-driven path then share the kernel's
 factorizations; the LU cache here serves ``kernel=False``.
+
+A sparse system (``system.is_sparse``) takes the same path with sparse matrices: an
+assignment's system is gathered from the rows of the CSR ``K`` and factorized by SuperLU
+(COLAMD ordering, partial pivoting), the factor cached and updated like a dense LU, and the
+reactions are one sparse product ``K z``.
 """
 
 from __future__ import annotations
@@ -20,6 +25,8 @@ import warnings
 
 import numpy as np
 import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 from scipy.linalg.lapack import dgecon
 
 from . import kernel as _kernel
@@ -34,12 +41,17 @@ class FactorCache:
 
     # ------------------------------------------------------------------ K blocks
     def _Kq(self, rows, cols):
-        """Rows ``rows`` of ``dq/dz`` (``z = (dv, w)``), columns ``cols`` (indices into z)."""
-        return self.K[np.ix_(rows, cols)]
+        """Rows ``rows`` of ``dq/dz`` (``z = (dv, w)``), columns ``cols`` (indices into z);
+        dense (the pivoting fallbacks' use)."""
+        return self._dense(self.K[np.ix_(rows, cols)])
 
     def _Kp(self, rows, cols):
-        """Rows ``rows`` of ``dp/dz``, columns ``cols``."""
-        return self.K[np.ix_(self.n + np.asarray(rows, int), cols)]
+        """Rows ``rows`` of ``dp/dz``, columns ``cols`` (dense)."""
+        return self._dense(self.K[np.ix_(self.n + np.asarray(rows, int), cols)])
+
+    @staticmethod
+    def _dense(M):
+        return M.toarray() if sp.issparse(M) else M
 
     def _layout(self, s):
         """Free unknowns (indices into z) and the row coefficients of assignment ``s``."""
@@ -51,9 +63,16 @@ class FactorCache:
         return np.concatenate([jv, n + jw]), coef, jv, jw
 
     def _G_rows(self, s, free, coef, jv, jw, cols):
-        """Rows of the assignment's equations (a-rows ``q + c p``, b-rows ``p``) at ``cols``."""
+        """Rows of the assignment's equations (a-rows ``q + c p``, b-rows ``p``) at ``cols``
+        (a CSR matrix for a sparse system)."""
         n = self.n
         cols = np.asarray(cols, int)
+        if self.sparse:
+            out = self.K[np.concatenate([jv, n + jw])][:, cols]
+            if jv.size:
+                top = out[:jv.size] + sp.diags(coef) @ self.K[n + jv][:, cols]
+                out = sp.vstack([top, out[jv.size:]], format="csr")
+            return out
         out = self.K[np.ix_(np.concatenate([jv, n + jw]), cols)]  # cost ~ the output's size
         if jv.size:
             out[:jv.size] += coef[:, None] * self.K[np.ix_(n + jv, cols)]
@@ -66,6 +85,8 @@ class FactorCache:
     def _factor(self, s, key):
         free, coef, jv, jw = self._layout(s)
         Ms = self._G_rows(s, free, coef, jv, jw, free)
+        if self.sparse:
+            return self._factor_sparse(s, key, free, coef, jv, jw, Ms)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             lu = sla.lu_factor(Ms, check_finite=False)
@@ -75,8 +96,32 @@ class FactorCache:
         self._counters["factorizations"] += 1
         if not np.isfinite(rcond) or rcond < 1e-14:
             return None
-        F = _Factor(key, s.copy(), free, coef, jv, jw, lu, Ms.nbytes)
-        self._cache[key] = F
+        return self._store(_Factor(key, s.copy(), free, coef, jv, jw, lu, Ms.nbytes))
+
+    def _factor_sparse(self, s, key, free, coef, jv, jw, Ms):
+        """SuperLU factor of a sparse assignment system; ``None`` if (nearly) singular.
+
+        The singularity test is SuperLU's exact zero pivot or a pivot below ``1e-14`` of the
+        largest (a cheap proxy for a reciprocal condition number; every answer is verified
+        afterwards like the dense LU's).
+        """
+        try:
+            lu = spla.splu(Ms.tocsc())
+        except RuntimeError:  # exactly singular
+            lu = None
+        self.totals["factorizations"] += 1
+        self._counters["factorizations"] += 1
+        if lu is None:
+            return None
+        piv = np.abs(lu.U.diagonal())
+        if not np.all(np.isfinite(piv)) or piv.min() < 1e-14 * piv.max():
+            return None
+        nbytes = 12 * (lu.L.nnz + lu.U.nnz) + 8 * Ms.shape[0]
+        return self._store(_Factor(key, s.copy(), free, coef, jv, jw, lu, nbytes))
+
+    def _store(self, F):
+        """Cache ``F`` (LRU within ``cache_bytes``) and make it the base of updates."""
+        self._cache[F.key] = F
         self._cache_used += F.nbytes
         while self._cache_used > self.cache_bytes and len(self._cache) > 1:
             _, old = self._cache.popitem(last=False)
@@ -96,8 +141,14 @@ class FactorCache:
         if nzc.size and F.free.size:
             red -= self._G_rows(F.s, F.free, F.coef, F.jv, F.jw, nzc) @ Z[nzc]
         if F.free.size:
-            Z[F.free] = sla.lu_solve(F.lu, red, check_finite=False)
+            Z[F.free] = self._factor_solve(F, red)
         return Z
+
+    def _factor_solve(self, F: _Factor, rhs):
+        """``M_F^-1 rhs`` with the cached factor (rhs shape (m,) or (m, k))."""
+        if self.sparse:
+            return F.lu.solve(np.asarray(rhs, float))
+        return sla.lu_solve(F.lu, rhs, check_finite=False)
 
     def _full_rhs(self, s, q0, p0):
         n = self.n
@@ -115,16 +166,22 @@ class FactorCache:
         G = np.zeros((len(rows), 2 * n))
         for i, r in enumerate(rows):
             j = int(r) % n
-            if r < n and s[j] != STICK:
+            if r < n and s[j] != STICK:  # q_j + c p_j: rows j and n + j of K
                 c = self.f[j] if s[j] == FORWARD else (-self.f[j] if s[j] == BACKWARD else 0.0)
-                G[i, :n] = self.A[j] + c * self.Bt[j]
-                G[i, n:] = self.B[j] + c * self.C[j]
-            elif r >= n and s[j] == SEPARATED:
-                G[i, :n] = self.Bt[j]
-                G[i, n:] = self.C[j]
+                G[i] = self._k_row(j)
+                if c:
+                    G[i] += c * self._k_row(n + j)
+            elif r >= n and s[j] == SEPARATED:  # p_j: row n + j of K
+                G[i] = self._k_row(n + j)
             else:
                 G[i, r] = 1.0
         return G
+
+    def _k_row(self, r):
+        """Row ``r`` of ``K`` as a dense vector (length 2N)."""
+        if self.sparse:
+            return self.K[r].toarray().ravel()
+        return self.K[r]
 
     def _woodbury(self, F: _Factor, s, q0, p0):
         """Solve assignment ``s`` from the factors of ``F.s`` by a low-rank correction.
@@ -187,8 +244,11 @@ class FactorCache:
         called directly: the factors and right-hand side are finite by construction, checked
         once when ``F`` was factorized, so scipy's per-call checks are skipped)."""
         z = np.zeros(2 * self.n)
-        x, info = self._getrs(F.lu[0], F.lu[1], self._rhs(F.coef, F.jv, F.jw, q0, p0),
-                              overwrite_b=True)
+        rhs = self._rhs(F.coef, F.jv, F.jw, q0, p0)
+        if self.sparse:
+            x = F.lu.solve(rhs)
+        else:
+            x, info = self._getrs(F.lu[0], F.lu[1], rhs, overwrite_b=True)
         z[F.free] = x
         self._last_factor = F
         return z
@@ -260,7 +320,9 @@ class FactorCache:
             if kz is z:
                 return kq, kp
             F = None
-        if F is not None and F.krows is not None:
+        if self.sparse:
+            r = self.K @ z  # K is symmetric: reactions of z by one sparse product
+        elif F is not None and F.krows is not None:
             r = z[F.free] @ F.krows
         else:
             idx = np.flatnonzero(z)
@@ -272,6 +334,8 @@ class FactorCache:
 
     def _keep_rows(self, F):
         """Keep ``K[F.free]`` with a factor met again (a cache hit), within the cache budget."""
+        if self.sparse:  # reactions are one sparse product: nothing to keep
+            return
         if F.krows is None and self._cache_used + 16.0 * F.free.size * self.n <= self.cache_bytes:
             F.krows = self.K[F.free]
             F.nbytes += F.krows.nbytes

@@ -23,8 +23,9 @@ class Fallbacks:
 
     @cached_property
     def flexibility(self) -> np.ndarray:
-        """``G = K^-1`` (computed once, only when the Lemke fallback is needed)."""
-        K = np.block([[self.A, self.B], [self.Bt, self.C]])
+        """``G = K^-1`` (computed once, only when the Lemke fallback is needed; dense, also for
+        a sparse ``K``: Lemke's tableau is dense)."""
+        K = self.K.toarray() if self.sparse else np.block([[self.A, self.B], [self.Bt, self.C]])
         return sla.cho_solve(sla.cho_factor(K), np.eye(2 * self.n))
 
     def _lemke_flexibility(self, q0, p0, scale) -> MixedSolution:
@@ -179,7 +180,7 @@ class Fallbacks:
             free, coef, jv, jw = self._layout(s)
             z = np.zeros(2 * n)
             if free.size:
-                Ms = self._G_rows(s, free, coef, jv, jw, free)
+                Ms = self._dense(self._G_rows(s, free, coef, jv, jw, free))
                 try:
                     z[free] = np.linalg.solve(Ms, self._rhs(coef, jv, jw, q0, p0))
                 except np.linalg.LinAlgError:

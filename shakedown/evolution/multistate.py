@@ -107,9 +107,12 @@ def _group(solver, key, idx, V, q_w, p_w, guesses, Q0, P0, scales, out):
         if F is None:
             return
         rhs = -np.hstack([q0[:, F.jv] + F.coef * p0[:, F.jv], p0[:, F.jw]])
-        X, info = solver._getrs(F.lu[0], F.lu[1], rhs.T, overwrite_b=True)
-        if info != 0:
-            return
+        if solver.sparse:
+            X = F.lu.solve(np.ascontiguousarray(rhs.T))
+        else:
+            X, info = solver._getrs(F.lu[0], F.lu[1], rhs.T, overwrite_b=True)
+            if info != 0:
+                return
         Z[:, F.free] = X.T
         kr = F.krows if F.krows is not None else solver.K[F.free]
         R = X.T @ kr

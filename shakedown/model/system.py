@@ -14,10 +14,12 @@ from functools import cached_property
 
 import numpy as np
 import scipy.linalg as sla
+import scipy.sparse as sp
 
 from . import citations
+from . import sparse as _sparse
 from .errors import InputError, NotSymmetricError, ShapeError
-from .validation import check_conditioning, real_array
+from .validation import MAX_CONDITION, check_conditioning, real_array
 
 #: Relative tolerance of the symmetry check ``max|K - K^T| <= SYMMETRY_RTOL * max|K|``.
 #: FE condensation in double precision reaches ~1e-13; 1e-8 leaves room for matrices read
@@ -160,15 +162,18 @@ class DiscreteSystem:
     symmetry_rtol: float = field(default=SYMMETRY_RTOL, repr=False)
 
     def __post_init__(self):
+        rtol = self.symmetry_rtol
+        if isinstance(rtol, bool) or not isinstance(rtol, (int, float, np.floating)) \
+                or not 0 <= rtol < 1:
+            raise InputError(f"symmetry_rtol must be a number in [0, 1); got {rtol!r}")
+        if any(sp.issparse(M) for M in (self.A, self.B, self.C)):
+            self._init_sparse()
+            return
         A = _as_matrix("A", self.A)
         n = A.shape[0]
         B = _as_matrix("B", self.B, n)
         C = _as_matrix("C", self.C, n)
         f = _as_friction(self.friction, n)
-        rtol = self.symmetry_rtol
-        if isinstance(rtol, bool) or not isinstance(rtol, (int, float, np.floating)) \
-                or not 0 <= rtol < 1:
-            raise InputError(f"symmetry_rtol must be a number in [0, 1); got {rtol!r}")
         scale = max(np.abs(A).max(), np.abs(C).max(), np.abs(B).max(), np.finfo(float).tiny)
         for name, M in (("A", A), ("C", C)):
             asym = np.abs(M - M.T).max()
@@ -199,7 +204,63 @@ class DiscreteSystem:
         object.__setattr__(self, "C", K[n:, n:])
         object.__setattr__(self, "friction", f)
 
+    def _init_sparse(self):
+        """Sparse blocks: one symmetric CSR ``K``, checked without densifying
+        (:mod:`.sparse`); ``A``, ``B``, ``C`` are CSR copies of its blocks."""
+        A = _sparse.sparse_matrix("A", self.A)
+        n = A.shape[0]
+        B = _sparse.sparse_matrix("B", self.B, n)
+        C = _sparse.sparse_matrix("C", self.C, n)
+        f = _as_friction(self.friction, n)
+        scale = max(_sparse.abs_max(A), _sparse.abs_max(B), _sparse.abs_max(C),
+                    np.finfo(float).tiny)
+        for name, M in (("A", A), ("C", C)):
+            _sparse.check_symmetric(name, M, self.symmetry_rtol, scale)
+        K = sp.bmat([[0.5 * (A + A.T), B], [B.T, 0.5 * (C + C.T)]], format="csr")
+        K.eliminate_zeros()
+        K.sort_indices()
+        del A, B, C
+        lu = _sparse.check_sparse_conditioning("K = [[A, B], [B^T, C]]", K,
+                                               max_condition=MAX_CONDITION)
+        self.__dict__["K"] = K
+        self.__dict__["_sparse_lu"] = lu
+        object.__setattr__(self, "A", K[:n, :n].tocsr())
+        object.__setattr__(self, "B", K[:n, n:].tocsr())
+        object.__setattr__(self, "C", K[n:, n:].tocsr())
+        object.__setattr__(self, "friction", f)
+
     # ------------------------------------------------------------------ properties
+    @property
+    def is_sparse(self) -> bool:
+        """``True`` when ``K`` (and ``A``, ``B``, ``C``) are ``scipy.sparse`` CSR matrices."""
+        return sp.issparse(self.__dict__.get("K", self.A))
+
+    @property
+    def nnz(self) -> int:
+        """Stored entries of ``K`` (``(2N)^2`` for a dense system)."""
+        K = self.K
+        return int(K.nnz) if sp.issparse(K) else int(K.size)
+
+    def diagonal(self) -> np.ndarray:
+        """The diagonal of ``K`` (``diag(A)``, then ``diag(C)``), shape (2N,) [force / length]."""
+        return np.asarray(self.K.diagonal(), float)
+
+    def to_dense(self) -> DiscreteSystem:
+        """The same system with dense ``K`` (itself when already dense)."""
+        if not self.is_sparse:
+            return self
+        return DiscreteSystem(self.A.toarray(), self.B.toarray(), self.C.toarray(),
+                              self.friction, symmetry_rtol=self.symmetry_rtol)
+
+    def to_sparse(self) -> DiscreteSystem:
+        """The same system with ``K`` as a ``scipy.sparse`` CSR matrix (exact zeros dropped;
+        itself when already sparse)."""
+        if self.is_sparse:
+            return self
+        return DiscreteSystem(sp.csr_matrix(self.A), sp.csr_matrix(self.B),
+                              sp.csr_matrix(self.C), self.friction,
+                              symmetry_rtol=self.symmetry_rtol)
+
     @property
     def n_nodes(self) -> int:
         """Number of contact nodes ``N``."""
@@ -216,12 +277,16 @@ class DiscreteSystem:
     @property
     def is_coupled(self) -> bool:
         """``True`` unless ``max|B| <= COUPLING_RTOL * max(|A|, |C|)``."""
-        scale = max(np.abs(self.A).max(), np.abs(self.C).max())
-        return bool(np.abs(self.B).max() > COUPLING_RTOL * scale)
+        amax = _sparse.abs_max
+        scale = max(amax(self.A), amax(self.C))
+        return bool(amax(self.B) > COUPLING_RTOL * scale)
 
     @cached_property
     def condition_number(self) -> float:
-        """2-norm condition number of ``K``."""
+        """2-norm condition number of ``K`` (Lanczos estimate for a sparse ``K``)."""
+        if self.is_sparse:
+            lu = self.__dict__.get("_sparse_lu")
+            return _sparse.largest_eigenvalue(self.K) / _sparse.smallest_eigenvalue(self.K, lu)
         ev = np.linalg.eigvalsh(self.K)
         return float(ev[-1] / ev[0])
 
@@ -239,15 +304,18 @@ class DiscreteSystem:
         """Reactions ``(q, p)`` for slips and gaps (shape (..., N)) and welded reactions."""
         v = np.asarray(slip, float)
         w = np.asarray(gap, float)
-        q = np.asarray(q_w, float) + v @ self.A.T + w @ self.B.T
-        p = np.asarray(p_w, float) + v @ self.B + w @ self.C.T
-        return q, p
+        n = self.n_nodes
+        u = np.concatenate(np.broadcast_arrays(v, w), axis=-1).reshape(-1, 2 * n)
+        r = (self.K @ u.T).T.reshape(np.broadcast_shapes(v.shape, w.shape)[:-1] + (2 * n,))
+        return np.asarray(q_w, float) + r[..., :n], np.asarray(p_w, float) + r[..., n:]
 
     def __repr__(self) -> str:
         f = self.friction
         fr = f"{f[0]:g}" if np.all(f == f[0]) else f"[{f.min():g}..{f.max():g}]"
+        sparse = f", sparse (nnz={self.nnz})" if self.is_sparse else ""
         return (
-            f"DiscreteSystem(n_nodes={self.n_nodes}, coupled={self.is_coupled}, friction={fr})"
+            f"DiscreteSystem(n_nodes={self.n_nodes}, coupled={self.is_coupled}, "
+            f"friction={fr}{sparse})"
         )
 
     # ------------------------------------------------------------------ critical friction
@@ -288,9 +356,9 @@ class DiscreteSystem:
         n = self.n_nodes
         f = self.friction
         fmax = float(f.max()) if n else 0.0
-        diagB = np.abs(np.diag(self.B))
+        diagB = np.abs(self.B.diagonal())
         with np.errstate(divide="ignore", invalid="ignore"):
-            node_bounds = np.where((diagB > 0) & (f > 0), np.diag(self.A) / (diagB * f), np.inf)
+            node_bounds = np.where((diagB > 0) & (f > 0), self.A.diagonal() / (diagB * f), np.inf)
         upper = float(node_bounds.min())
 
         def result(factor, exact, method):
@@ -309,7 +377,15 @@ class DiscreteSystem:
         if n == 1:
             return result(upper, True, "single-node")
         if n <= max_exact_nodes:
+            if self.is_sparse:
+                return self.to_dense()._critical_friction(max_exact_nodes)
             return result(self._critical_factor_by_enumeration(), True, "enumeration")
+        if self.is_sparse:
+            # (A - B C^-1 B^T)^-1 is the leading block of K^-1: Lanczos with solves, no dense Schur
+            lmin = _sparse.smallest_schur_eigenvalue(self.K, n, self.__dict__.get("_sparse_lu"))
+            Fs = sp.diags(f)
+            lmax = _sparse.largest_eigenvalue(sp.csr_matrix(Fs @ self.C @ Fs))
+            return result(min(np.sqrt(max(lmin, 0.0) / lmax), upper), False, "sufficient-bound")
         schur = self.A - self.B @ np.linalg.solve(self.C, self.B.T)
         lmin = float(np.linalg.eigvalsh(0.5 * (schur + schur.T))[0])
         lmax = float(np.linalg.eigvalsh(f[:, None] * self.C * f[None, :])[-1])

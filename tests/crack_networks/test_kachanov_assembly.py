@@ -52,7 +52,32 @@ def test_truncated_interaction_keeps_near_pairs_exactly():
         errors.append(np.linalg.norm(D - full) / np.linalg.norm(full - np.diag(np.diag(full))))
     assert errors[0] > errors[1] > errors[2] and errors[3] < 1e-13
     m = cn.kachanov_model(cs, 3.0, 0.25, interaction_radius=1e3)
-    np.testing.assert_allclose(m.stiffness_raw, full, atol=1e-13 * full[0, 0], rtol=0)
+    assert m.is_sparse and m.system.is_sparse  # kept sparse (issue 14)
+    np.testing.assert_allclose(m.stiffness_raw.toarray(), full, atol=1e-13 * full[0, 0], rtol=0)
+    md = cn.kachanov_model(cs, 3.0, 0.25, interaction_radius=1e3, sparse=False)
+    assert not md.is_sparse and not md.system.is_sparse
+    np.testing.assert_array_equal(m.system.K.toarray(), md.system.K)
+
+
+def test_sparse_model_matches_its_dense_twin():
+    """A truncated model kept sparse: the same system, asymmetry, smallest eigenvalue and mean
+    discontinuities as the same truncated matrix made dense."""
+    cs = cn.sample_crack_set(80, density=0.1, min_spacing=0.1, rng=6)
+    ms = cn.kachanov_model(cs, 2.0, 0.3, interaction_radius=4)
+    md = cn.kachanov_model(cs, 2.0, 0.3, interaction_radius=4, sparse=False)
+    np.testing.assert_array_equal(ms.system.K.toarray(), md.system.K)
+    a, b = ms.asymmetry, md.asymmetry
+    assert a.relative_norm == pytest.approx(b.relative_norm, rel=1e-12)
+    assert a.max_pair == pytest.approx(b.max_pair, rel=1e-12) and a.worst_pair == b.worst_pair
+    np.testing.assert_allclose(a.pair.toarray(), b.pair, rtol=1e-12, atol=1e-15)
+    assert ms.min_eigenvalue == pytest.approx(md.min_eigenvalue, rel=1e-8)
+    stress = (0.3, -0.2, -1.0)
+    np.testing.assert_allclose(ms.mean_discontinuities(stress), md.mean_discontinuities(stress),
+                               rtol=1e-10, atol=1e-14)
+    for x, y in zip(ms.blocks(), md.blocks(), strict=True):
+        np.testing.assert_array_equal(x.toarray(), y)
+    with pytest.raises(InputError, match="sparse=True needs interaction_radius"):
+        cn.kachanov_model(cs, sparse=True)
 
 
 @pytest.mark.parametrize("bad", [0, -1.0, np.nan, np.inf])

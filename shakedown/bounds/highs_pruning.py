@@ -1,0 +1,130 @@
+"""``lam1`` by HiGHS with shared vertices: the activity intervals a sparse ``G`` needs (issue 14).
+
+The dense path prunes the ``lam_high`` LPs with a facet walk on a dense ``G``
+(:mod:`.pruning`).  On a sparse constraint set (a truncated crack interaction, a user's sparse
+``K``) every LP is solved by HiGHS on the sparse matrix, and the same two facts cut the number
+of LPs from ``4N`` to a few dozen:
+
+* **Shared vertices.**  Every certified optimum ``(v*, lam*)`` of a "min/max lam with row k
+  tight" LP is a point of ``H(lam*)``; each row ``j`` tight there has a non-empty face at
+  ``lam*``.  A vertex at ``lam* = 0`` proves ``lam_low_j = 0`` for all its tight rows (about
+  ``N`` of them).
+* **Incumbent pruning** (as :mod:`.pruning`): once every ``lam_low = 0``, ``lam1 = min_k
+  lam_high_k``.  With the incumbent ``t`` (the smallest exact ``lam_high`` so far, first
+  ``lam2``), row ``k`` only needs the capped LP ``max lam`` with row ``k`` tight and
+  ``lam <= t``: a value below ``t`` is row ``k``'s exact ``lam_high`` and the new incumbent; a
+  binding cap proves ``lam_high_j >= t`` for every row ``j`` tight at the optimum.
+
+Rows are visited in order of decreasing slack at the ``lam2`` optimum (the facets farthest
+from the last safe state are the first candidates to leave).  Each answer is certified by
+:class:`~.lp.ReusableLP` (primal and dual feasibility, stationarity, complementarity), and a
+row counts as tight at a vertex when its slack is below :data:`TIGHT_RTOL` of its force scale.
+Result: per row the exact ``lam_high`` (``hi_exact``) or a proven lower bound ``>=`` the final
+``lam1``; every ``lam_low`` exact.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from .outcome import value
+
+#: Relative slack below which a row counts as tight at a certified vertex.
+TIGHT_RTOL = 1e-9
+
+
+def tight_rows(cs, x, lam):
+    """Rows of ``G v <= c + lam m`` tight at ``v = x`` (slack below :data:`TIGHT_RTOL` of the
+    row's scale ``max|G_k| max|v| + |c_k + lam m_k|``)."""
+    b = cs.c + lam * cs.m
+    slack = b - cs.G @ x
+    gmax = (abs(cs.G).max(axis=1).toarray().ravel() if sp.issparse(cs.G)
+            else np.abs(cs.G).max(axis=1))
+    scale = gmax * max(np.abs(x).max(initial=0.0), 1.0) + np.abs(b)
+    return np.flatnonzero(np.abs(slack) <= TIGHT_RTOL * np.maximum(scale, 1e-300))
+
+
+def cover(eng, cs, lam, undecided, max_lps=64):
+    """Rows whose face is non-empty at ``lam``, found by covering LPs: ``lam`` fixed,
+    maximise the sum of the normals of the undecided rows of one family (all ``I`` or all
+    ``II``; the two families of one node point opposite ways) so that the optimal vertex makes
+    as many of them tight as it can.  Marks them in ``undecided`` (set to ``False``); stops when
+    an LP adds nothing new.  Returns the number of LPs."""
+    n = cs.n_nodes
+    eng.lp.set_col_bounds(n, lam, lam)
+    lps = 0
+    try:
+        while lps < max_lps and undecided.any():
+            half = [np.flatnonzero(undecided[:n]), n + np.flatnonzero(undecided[n:])]
+            rows = max(half, key=len)
+            cost = np.append(np.asarray(cs.G[rows].sum(axis=0)).ravel(), 0.0)
+            ans = eng.run("max", cost=cost)
+            lps += 1
+            if ans.status != "optimal":
+                break
+            tight = tight_rows(cs, ans.x[:n], lam)
+            new = tight[undecided[tight]]
+            if not new.size:
+                break
+            undecided[new] = False
+    finally:
+        eng.lp.set_col_bounds(n, 0.0, np.inf)
+    return lps
+
+
+def intervals_pruned(eng, cs, lam2, v_at_lam2):
+    """``(lam_low, lam_high, hi_exact)`` with every ``lam_low`` exact and ``lam_high`` exact only
+    where ``lam1`` needs it (module docstring); ``None`` when some ``lam_low`` is not 0 or a row
+    is never active (then ``lam1 = 0`` and the caller computes every interval exactly).
+
+    ``eng``: the :class:`~.highs_path.HighsModel` of the nondimensional ``cs``.
+    """
+    n = cs.n_nodes
+    R = 2 * n
+    if not np.isfinite(lam2):
+        return None
+    tol = 1e-9 * max(1.0, lam2)
+    # lam_low: covering LPs at lam = 0, then one LP per row left
+    undecided = np.ones(R, bool)
+    cover(eng, cs, 0.0, undecided)
+    lo = np.where(undecided, np.nan, 0.0)
+    for k in np.flatnonzero(undecided):
+        if not np.isnan(lo[k]):
+            continue
+        ans = eng.run("min", tight=(int(k),))
+        if ans.status != "optimal" or value(ans) > tol:
+            return None  # never active, or inactive at 0: lam1 = 0, the exact path says why
+        lo[k] = 0.0
+        lo[tight_rows(cs, ans.x[:n], ans.x[-1])] = 0.0
+    # lam_high: covering LPs at the incumbent t, capped LPs for the rows they cannot reach
+    hi = np.full(R, -np.inf)
+    exact = np.zeros(R, bool)
+    t = lam2
+    at_end = tight_rows(cs, v_at_lam2, lam2)
+    hi[at_end], exact[at_end] = lam2, True  # a face at the lam2 optimum: active up to lam2
+    slack = cs.c + lam2 * cs.m - cs.G @ v_at_lam2
+    order = np.argsort(-slack, kind="stable")
+    while True:
+        undecided = hi < t - tol
+        cover(eng, cs, t, undecided)
+        hi[~undecided] = np.maximum(hi[~undecided], t)
+        left = [int(k) for k in order if undecided[k]]
+        if not left:
+            break
+        eng.lp.set_col_bounds(n, 0.0, t)
+        try:
+            ans = eng.run("max", tight=(left[0],))
+        finally:
+            eng.lp.set_col_bounds(n, 0.0, np.inf)
+        if ans.status != "optimal":
+            return None
+        lam = float(ans.x[-1])
+        k = left[0]
+        if lam < t - tol:  # the cap is slack: this is row k's exact lam_high
+            hi[k], exact[k] = lam, True
+            t = lam
+        tight = tight_rows(cs, ans.x[:n], lam)
+        hi[tight] = np.maximum(hi[tight], lam)
+        hi[k] = max(hi[k], lam)
+    return lo, hi, exact

@@ -1,0 +1,99 @@
+"""Shakedown bounds of a sparse system (issue 14): HiGHS on the sparse constraint matrix, lam1
+by covering LPs and incumbent pruning (shakedown.bounds.highs_pruning), never densified."""
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+import shakedown as sd
+from shakedown.bounds import highs_pruning
+from shakedown.bounds.constraints import Scales, extreme_constraints
+
+crack_networks = pytest.importorskip("crack_networks")
+
+
+def network(n, radius, seed=1):
+    cs = crack_networks.sample_crack_set(n, density=0.1, half_length=1, min_spacing=0.1,
+                                         rng=seed)
+    m = crack_networks.kachanov_model(cs, 1, 0.25, 0.6, interaction_radius=radius)
+    return m, m.load_cycle((-1, 0, -1), (0, 1, 0))
+
+
+@pytest.mark.parametrize("n, radius, seed", [(40, 3, 1), (80, 5, 2), (120, 8, 3)])
+def test_sparse_bounds_equal_the_dense_twin_and_exact_highs(n, radius, seed):
+    m, load = network(n, radius, seed)
+    s = m.system
+    assert s.is_sparse
+    cs = extreme_constraints(s, load)
+    assert sp.issparse(cs.G) and sp.issparse(cs.sep_G)
+    b = sd.shakedown_bounds(s, load)
+    d = sd.shakedown_bounds(s.to_dense(), load)
+    e = sd.shakedown_bounds(s.to_dense(), load, solver="highs", intervals=True)
+    for x in (d, e):
+        assert b.lam2 == pytest.approx(x.lam2, rel=1e-7)
+        assert b.lam1 == pytest.approx(x.lam1, rel=1e-7)
+        assert b.lam_separation == pytest.approx(x.lam_separation, rel=1e-6)
+    assert b.limiting_constraint == e.limiting_constraint
+    # exact rows equal the exact intervals; the others are proven lower bounds >= lam1
+    ex = b.lam_high_exact
+    assert ex[b.limiting_constraint]
+    np.testing.assert_allclose(b.lam_high[ex], e.lam_high[ex], rtol=1e-7)
+    assert np.all(b.lam_high[~ex] <= e.lam_high[~ex] * (1 + 1e-7))
+    assert np.all(b.lam_high >= b.lam1 * (1 - 1e-9))
+    np.testing.assert_allclose(b.lam_low, 0.0, atol=1e-9)
+    assert max(b.residuals.values()) < 1e-6
+    assert b.safe_state.shape == (n,) and np.isfinite(b.safe_margin)
+
+
+def test_sparse_bounds_units():
+    m, load = network(60, 4, 5)
+    s = m.system
+    k, f = 3e7, 2e4  # stiffness and force units
+    s2 = sd.DiscreteSystem(s.A * k, s.B * k, s.C * k, s.friction)
+    parts = {key: getattr(load, key) * f for key in ("q_cos", "q_sin", "p_cos", "p_sin")
+             if getattr(load, key) is not None}
+    load2 = sd.LoadCycle.from_harmonics(load.q0 * f, load.p0 * f, **parts)
+    a, b = sd.shakedown_bounds(s, load), sd.shakedown_bounds(s2, load2)
+    assert b.lam1 == pytest.approx(a.lam1, rel=1e-8)
+    assert b.lam2 == pytest.approx(a.lam2, rel=1e-8)
+    np.testing.assert_allclose(b.safe_state, a.safe_state * f / k, rtol=1e-6,
+                               atol=1e-8 * np.abs(a.safe_state).max() * f / k)
+
+
+def test_tight_rows_rejects_a_point_off_the_face():
+    """The vertex check behind every shared certificate: a point moved off the facets is not
+    counted tight on them (and an infeasible point's violated rows are not tight either)."""
+    m, load = network(30, 3, 7)
+    cs = Scales.of(extreme_constraints(m.system, load))
+    ch = cs.nondimensional(extreme_constraints(m.system, load))
+    b = sd.shakedown_bounds(m.system, load)
+    v = b.state_at_lam2 / cs.slip
+    lam = b.lam2 / cs.load_factor
+    tight = highs_pruning.tight_rows(ch, v, lam)
+    assert tight.size >= 1
+    k = int(tight[0])
+    g = np.asarray(ch.G[k].todense()).ravel()
+    moved = v - 1e-6 * g / np.dot(g, g)  # off row k's hyperplane, into the region
+    assert k not in highs_pruning.tight_rows(ch, moved, lam)
+    assert k not in highs_pruning.tight_rows(ch, v + 1e-6 * g / np.dot(g, g), lam)
+
+
+@pytest.mark.parametrize("seed, never", [(4, True), (7, False)])
+def test_sparse_lam1_zero_cases_take_the_exact_path(seed, never):
+    """A facet redundant from lam = 0 on (never active) or first touched above 0: lam1 = 0,
+    every interval exact, as on the dense path (the systems of tests/bounds/test_pruning.py)."""
+    rng = np.random.default_rng(seed)
+    n = 3
+    M = rng.standard_normal((2 * n, 2 * n))
+    K = M @ M.T + 0.3 * np.eye(2 * n)
+    d = sd.DiscreteSystem(K[:n, :n], K[:n, n:], K[n:, n:], 0.8)
+    p0 = 1 + rng.random(n)
+    q0 = 0.64 * p0 * rng.uniform(-1, 1, n)
+    load = sd.LoadCycle.from_harmonics(q0, p0, q_cos=rng.standard_normal(n),
+                                       p_cos=0.5 * rng.standard_normal(n))
+    b = sd.shakedown_bounds(d.to_sparse(), load)
+    e = sd.shakedown_bounds(d, load, solver="highs", intervals=True)
+    assert b.lam1 == 0.0 and b.lam2 == pytest.approx(e.lam2, rel=1e-7) and b.lam2 > 0
+    assert b.lam_high_exact.all() and b.limiting_constraint == e.limiting_constraint
+    assert np.isnan(b.lam_high).any() == never
+    np.testing.assert_allclose(b.lam_low, e.lam_low, rtol=1e-7, atol=1e-9)

@@ -1,0 +1,163 @@
+"""The cyclic solver on a sparse K (issue 14): the same runs as on the dense twin, with SuperLU
+factors of the assignment systems and sparse reaction products (no densifying)."""
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+import shakedown as sd
+from shakedown.evolution.complementarity import FEAS_TOL, StepSolver
+
+
+def banded(n, seed=0, coupling=0.3):
+    rng = np.random.default_rng(seed)
+    K = np.zeros((2 * n, 2 * n))
+    for d in (1, 2, 7):
+        v = rng.uniform(-1, 1, 2 * n - d) * 0.3
+        K += np.diag(v, d) + np.diag(v, -d)
+    K[:n, n:] *= coupling / 0.3
+    K[n:, :n] *= coupling / 0.3
+    K += np.diag(np.abs(K).sum(axis=1) + rng.uniform(0.5, 1.5, 2 * n))
+    s = sd.DiscreteSystem(K[:n, :n], K[:n, n:], K[n:, n:], friction=1.0)
+    return s.with_friction(0.5 * min(s.critical_friction().value, 2.0))
+
+
+def load_of(rng, s, amp=2.0, p_mean=1.0, p_amp=0.3):
+    n = s.n_nodes
+    f = float(s.friction.max())
+    return sd.LoadCycle.from_harmonics(0.1 * rng.normal(size=n), np.full(n, p_mean),
+                                       q_cos=amp * f * rng.normal(size=n),
+                                       p_sin=p_amp * rng.normal(size=n))
+
+
+def assert_same_run(a, b, s):
+    assert a.status == b.status
+    assert a.n_cycles == b.n_cycles and a.period == b.period
+    kmin = s.A.diagonal().min()
+    W = a.force_scale ** 2 / kmin
+    np.testing.assert_allclose(a.dissipation, b.dissipation, rtol=0, atol=1e-9 * W)
+    tol = 10 * FEAS_TOL * a.force_scale / kmin
+    np.testing.assert_allclose(a.final_slip, b.final_slip, rtol=0, atol=tol)
+    np.testing.assert_allclose(a.final_gap, b.final_gap, rtol=0, atol=tol)
+    np.testing.assert_array_equal(a.stuck_nodes, b.stuck_nodes)
+    assert a.step_statuses == b.step_statuses
+
+
+@pytest.mark.parametrize("seed", range(4))
+@pytest.mark.parametrize("lam", [0.4, 1.5])
+def test_sparse_runs_equal_dense_runs(seed, lam):
+    """Shakedown to cyclic slip, with separation for seeds 2-3 (normal load dips below 0)."""
+    rng = np.random.default_rng(seed)
+    d = banded(30, seed)
+    load = load_of(rng, d, p_mean=1.0 if seed < 2 else 0.2, p_amp=0.3 if seed < 2 else 0.6)
+    s = d.to_sparse()
+    a = sd.solve_cycles(s, load, lam, steps_per_cycle=24, max_cycles=40)
+    b = sd.solve_cycles(d, load, lam, steps_per_cycle=24, max_cycles=40)
+    assert_same_run(a, b, d)
+
+
+def test_sparse_solver_never_densifies_and_uses_superlu(monkeypatch):
+    """The step's factors are SuperLU objects; K stays sparse (toarray is never called on it
+    outside the Lemke fallback)."""
+    rng = np.random.default_rng(7)
+    d = banded(60, 7)
+    s = d.to_sparse()
+    load = load_of(rng, d, amp=3.0)
+    solver = StepSolver(s)
+    assert solver.sparse and not solver.kernel
+    calls = []
+    real = type(s.K).toarray
+
+    def spy(self, *a, **k):
+        if self.shape == s.K.shape:
+            calls.append(self.shape)
+        return real(self, *a, **k)
+
+    monkeypatch.setattr(type(s.K), "toarray", spy)
+    run = sd.solve_cycles(s, load, 1.2, steps_per_cycle=32, max_cycles=20, solver=solver)
+    assert run.status in ("periodic", "shakedown") and not calls
+    assert solver.totals["factorizations"] > 0 and solver.totals["lemke_calls"] == 0
+    F = next(iter(solver._cache.values()))
+    assert type(F.lu).__name__ == "SuperLU"
+
+
+def test_sparse_many_nodes_change_state_at_once():
+    """A load jump from zero to beyond gross slip: every node slips in the first step; the
+    Woodbury updates on a SuperLU base and the fresh factorizations agree with the dense LU."""
+    rng = np.random.default_rng(3)
+    d = banded(300, 3)
+    load = load_of(rng, d, amp=6.0)
+    s = d.to_sparse()
+    opts = dict(update_min_size=8, max_update_rank=64)
+    a = sd.solve_cycles(s, load, 1.0, steps_per_cycle=8, max_cycles=6,
+                        solver=StepSolver(s, **opts))
+    b = sd.solve_cycles(d, load, 1.0, steps_per_cycle=8, max_cycles=6,
+                        solver=StepSolver(d, kernel=False, **opts))
+    assert_same_run(a, b, d)
+
+
+def test_sparse_multistate_and_events_equal_dense():
+    rng = np.random.default_rng(5)
+    d = banded(20, 5)
+    s = d.to_sparse()
+    load = load_of(rng, d)
+    V0 = 0.2 * rng.normal(size=(4, 20)) / d.A.diagonal().min()
+    ra = sd.solve_cycles(s, load, 1.0, initial_slip=V0, steps_per_cycle=16, max_cycles=30)
+    rb = sd.solve_cycles(d, load, 1.0, initial_slip=V0, steps_per_cycle=16, max_cycles=30)
+    for a, b in zip(ra, rb, strict=True):
+        assert_same_run(a, b, d)
+    ea = sd.solve_cycles(s, load, 1.0, method="events", steps_per_cycle=16, max_cycles=20)
+    eb = sd.solve_cycles(d, load, 1.0, method="events", steps_per_cycle=16, max_cycles=20)
+    assert_same_run(ea, eb, d)
+
+
+@pytest.mark.parametrize("force, length", [(1e6, 1.0), (1.0, 1e-4)])
+def test_sparse_run_units(force, length):
+    """Forces x F, lengths x L: K x F / L, slips x L, dissipation x F L."""
+    rng = np.random.default_rng(11)
+    d = banded(25, 11)
+    load = load_of(rng, d)
+    k = force / length
+    s2 = sd.DiscreteSystem(sp.csr_matrix(d.A * k), sp.csr_matrix(d.B * k),
+                           sp.csr_matrix(d.C * k), d.friction)
+    parts = {k: getattr(load, k) * force for k in ("q_cos", "q_sin", "p_cos", "p_sin")
+             if getattr(load, k) is not None}
+    load2 = sd.LoadCycle.from_harmonics(load.q0 * force, load.p0 * force, **parts)
+    a = sd.solve_cycles(d.to_sparse(), load, 1.3, steps_per_cycle=16, max_cycles=30)
+    b = sd.solve_cycles(s2, load2, 1.3, steps_per_cycle=16, max_cycles=30)
+    assert a.n_cycles == b.n_cycles
+    np.testing.assert_allclose(b.dissipation, a.dissipation * force * length, rtol=1e-8,
+                               atol=1e-10 * abs(a.dissipation).max() * force * length)
+    np.testing.assert_allclose(b.final_slip, a.final_slip * length, rtol=1e-7,
+                               atol=1e-9 * length * abs(a.final_slip).max())
+
+
+def test_wrong_sparse_factor_is_caught(monkeypatch):
+    """A SuperLU solve 1e-3 off: the answer fails its own checks (the run stops with a
+    message, or the step is re-solved), never a silently wrong dissipation."""
+    rng = np.random.default_rng(2)
+    d = banded(30, 2)
+    s = d.to_sparse()
+    load = load_of(rng, d, amp=3.0)
+    good = sd.solve_cycles(s, load, 1.5, steps_per_cycle=16, max_cycles=20)
+    solver = StepSolver(s)
+    real = solver._factor_sparse
+
+    class Wrong:
+        def __init__(self, lu):
+            self.lu, self.L, self.U = lu, lu.L, lu.U
+
+        def solve(self, b, trans="N"):
+            return self.lu.solve(b, trans) * (1 + 1e-3)
+
+    def wrong(*a):
+        F = real(*a)
+        if F is not None:
+            F.lu = Wrong(F.lu)
+        return F
+
+    monkeypatch.setattr(solver, "_factor_sparse", wrong)
+    bad = sd.solve_cycles(s, load, 1.5, steps_per_cycle=16, max_cycles=20, solver=solver)
+    assert bad.status == "step_failed" or np.allclose(bad.dissipation[-1], good.dissipation[-1],
+                                                      rtol=1e-6)
+    assert bad.status == "step_failed", "a 1e-3 error in every solve must not pass the checks"
