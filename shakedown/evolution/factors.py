@@ -161,27 +161,25 @@ class FactorCache:
         return h
 
     def _rows_full(self, s, rows):
-        """Full rows (length 2N) ``rows`` of the assignment's system ``G_s``."""
+        """Full rows (length 2N) ``rows`` of the assignment's system ``G_s`` (the a-row of a
+        non-stick node is ``q_j + c p_j``: rows ``j`` and ``n + j`` of ``K``; the b-row of a
+        separated node is ``p_j``; every other row is the unit row of a fixed unknown)."""
         n = self.n
-        G = np.zeros((len(rows), 2 * n))
-        for i, r in enumerate(rows):
-            j = int(r) % n
-            if r < n and s[j] != STICK:  # q_j + c p_j: rows j and n + j of K
-                c = self.f[j] if s[j] == FORWARD else (-self.f[j] if s[j] == BACKWARD else 0.0)
-                G[i] = self._k_row(j)
-                if c:
-                    G[i] += c * self._k_row(n + j)
-            elif r >= n and s[j] == SEPARATED:  # p_j: row n + j of K
-                G[i] = self._k_row(n + j)
-            else:
-                G[i, r] = 1.0
+        rows = np.asarray(rows, int)
+        j = rows % n
+        a = (rows < n) & (s[j] != STICK)
+        b = (rows >= n) & (s[j] == SEPARATED)
+        c = np.where(s[j] == FORWARD, self.f[j], np.where(s[j] == BACKWARD, -self.f[j], 0.0))
+        G = np.zeros((rows.size, 2 * n))
+        if np.any(a | b):
+            G[a | b] = self._dense(self.K[n + j[a | b]])  # p_j rows, gathered at once
+            ia = np.flatnonzero(a)
+            if ia.size:
+                G[ia] *= c[ia, None]
+                G[ia] += self._dense(self.K[j[ia]])
+        unit = np.flatnonzero(~(a | b))
+        G[unit, rows[unit]] = 1.0
         return G
-
-    def _k_row(self, r):
-        """Row ``r`` of ``K`` as a dense vector (length 2N)."""
-        if self.sparse:
-            return self.K[r].toarray().ravel()
-        return self.K[r]
 
     def _woodbury(self, F: _Factor, s, q0, p0):
         """Solve assignment ``s`` from the factors of ``F.s`` by a low-rank correction.

@@ -103,7 +103,7 @@ def check_sampling(system, exact_load, lam, n_samples, v, w, shook_down, orbit, 
 
 def non_finite_message(force_scale: float, system) -> str:
     """Why a run's numbers overflowed, and the fix."""
-    k = float(np.abs(np.diag(system.K)).min())
+    k = float(np.abs(system.diagonal()).min())
     return (f"the result is not finite: forces of order F = {force_scale:.3g} over stiffnesses "
             f"of order {k:.3g} give energies ~F^2/k beyond the floating-point range; lower the "
             "load factor or express forces in larger units")

@@ -167,7 +167,7 @@ def steady_cycle(system, load, lam: float, initial_slip=None, *, method: str = "
     scale = float(np.max(natural_slip_scale(system, load, lam)))
     budget = int(max_evaluations)
     history = []
-    diag_a = np.diag(system.A)
+    diag_a = system.A.diagonal()
     force = [None]
 
     def resid(x, y):

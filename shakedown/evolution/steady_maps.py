@@ -26,7 +26,7 @@ def natural_slip_scale(system, load, lam: float = 0.0) -> np.ndarray:
     1).
     """
     f = system.friction
-    a = np.diag(system.A)
+    a = system.A.diagonal()
     qmax = np.maximum(-load.periodic_min(1.0, 0.0)[0], -load.periodic_min(-1.0, 0.0)[0])
     pmax = np.maximum(-load.periodic_min(0.0, 1.0)[0], -load.periodic_min(0.0, -1.0)[0])
     force = f * np.abs(load.p0) + np.abs(load.q0) + float(lam) * (qmax + f * pmax)
@@ -54,9 +54,9 @@ def sample_initial_slips(system, load, n_states: int, rng=None, *, scale: float 
         raise InputError(f"scale must be a positive number; got {scale}")
     gen = np.random.default_rng(rng)
     p0 = np.asarray(load.p0, float)
-    s = system.friction * np.abs(p0) / np.diag(system.A)
+    s = system.friction * np.abs(p0) / system.A.diagonal()
     fallback = max(float(np.max(np.abs(p0))), float(np.max(np.abs(load.q0))), 1.0)
-    s = np.where(s > 0, s, fallback / np.diag(system.A))
+    s = np.where(s > 0, s, fallback / system.A.diagonal())
     out = np.zeros((n_states, n))
     u = gen.uniform(-1.0, 1.0, (n_states - 1, n))
     for j in range(1, n_states):

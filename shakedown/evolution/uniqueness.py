@@ -285,7 +285,7 @@ def _verdict(system, load, lam, states, results, w_rtol):
     spread = float(Wok.max() - Wok.min()) if Wok.size else float("nan")
     s_nat = natural_slip_scale(system, load, lam)
     slip_scale = float(np.max(s_nat))
-    force = float(np.max(s_nat * np.diag(system.A)))  # largest friction / tangential load
+    force = float(np.max(s_nat * system.A.diagonal()))  # largest friction / tangential load
     w_tol = float(w_rtol) * max(float(np.max(np.abs(Wok))) if Wok.size else 0.0,
                                 force * slip_scale)
     if steady.sum() >= 1:
@@ -295,7 +295,7 @@ def _verdict(system, load, lam, states, results, w_rtol):
         reac_spread = float(np.nanmax(rng_[1:])) if np.isfinite(rng_[1:]).any() else float("nan")
     else:
         slip_spread = reac_spread = float("nan")
-    tv = max(slip_spread * float(np.max(np.diag(system.A))), reac_spread) / force
+    tv = max(slip_spread * float(np.max(system.A.diagonal())), reac_spread) / force
     return UniquenessStudy(
         table=table,
         lam=float(lam),

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
+import scipy.sparse as sp
 
 from ..model.errors import InputError, ShapeError
 from ..model.system import SYMMETRY_RTOL
@@ -122,7 +123,10 @@ def as_dynamic_stiffness(source, mass=None):
         return source.dynamic_stiffness
     if callable(source) and not isinstance(source, np.ndarray):
         return source
-    K = real_array("K", source.K if hasattr(source, "K") else source)
+    K = source.K if hasattr(source, "K") else source
+    if sp.issparse(K):  # the eigenproblems are dense: a sparse K (2N x 2N) is densified here
+        K = K.toarray()
+    K = real_array("K", K)
     if K.ndim != 2 or K.shape[0] != K.shape[1] or K.shape[0] % 2:
         raise ShapeError(f"K must have shape (2N, 2N); got {K.shape}")
     K = check_stiffness("K", K, symmetry_rtol=SYMMETRY_RTOL)

@@ -41,7 +41,11 @@ reaction (every state starts closed), as :func:`shakedown.sample_initial_slips` 
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
 __all__ = ["STATE_KINDS", "state_kind", "initial_states", "lam_points", "refine_points"]
 
@@ -74,15 +78,24 @@ def _corner(system, load, signs):
     f = np.asarray(system.friction, float)
     sf = signs * f
     rhs = sf * load.p0 - load.q0
-    M = system.A - sf[:, None] * system.B.T
-    try:
-        v = np.linalg.solve(M, rhs)
-    except np.linalg.LinAlgError:
-        v = None
+    if sp.issparse(system.A):
+        M = (system.A - sp.diags(sf) @ system.B.T).tocsc()
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # a singular M is handled below
+                v = spla.spsolve(M, rhs)
+        except RuntimeError:
+            v = None
+    else:
+        M = system.A - sf[:, None] * system.B.T
+        try:
+            v = np.linalg.solve(M, rhs)
+        except np.linalg.LinAlgError:
+            v = None
     scale = np.abs(rhs).max(initial=0.0)
     if v is None or not np.all(np.isfinite(v)) or \
             np.abs(M @ v - rhs).max(initial=0.0) > 1e-8 * scale:
-        v = rhs / np.diag(system.A)
+        v = rhs / system.A.diagonal()
     return v
 
 

@@ -99,7 +99,7 @@ def row_of_run(system, run) -> dict:
 
         v, _, states = orbit_arrays(run.steady_orbit)
         travel = np.abs(np.diff(v, axis=0)).sum(axis=0)
-        zero = FEAS_TOL * float(run.force_scale) / np.diag(system.A)
+        zero = FEAS_TOL * float(run.force_scale) / system.A.diagonal()
         slips = travel > zero
         opens = np.any(states == SEPARATED, axis=0)
         row.update(frac_slip=slips.mean(), frac_open=opens.mean(),

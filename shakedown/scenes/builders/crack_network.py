@@ -10,7 +10,11 @@
     Material and model: ``shear_modulus`` (default 1.0), ``poisson_ratio`` (0.25),
     ``friction`` (0.6), ``symmetric`` (true; false is refused, a DiscreteSystem needs a
     symmetric K), ``method`` (``"kachanov"`` default, or ``"bem"``), ``weighting``
-    (``"uniform"`` default or ``"elliptic"``, Kachanov only), ``n_modes`` (BEM, default 16).
+    (``"uniform"`` default or ``"elliptic"``, Kachanov only), ``n_modes`` (BEM, default 16),
+    ``interaction_radius`` (Kachanov, uniform weighting: keep the interactions of pairs closer
+    than this many ``a_i + a_j``; the system is then sparse and the cyclic runs and bounds use
+    it without densifying; its error against the full interaction is in
+    ``benchmarks/RESULTS_kachanov_assembly.md``).
 ``[load]`` keys
     ``static``, ``cyclic``: far-field stresses ``[sxx, sxy, syy]`` (tension positive) of
     ``S(t) = static + lam * cyclic * cos(2 pi t)``; defaults ``[-1, 0, -1]`` and ``[0, 1, 0]``
@@ -41,6 +45,7 @@ MODEL_KEYS = {
     "method": (str,),
     "weighting": (str,),
     "n_modes": (int,),
+    "interaction_radius": (int, float),
 }
 LOAD_KEYS = ("static", "cyclic")
 
@@ -136,10 +141,12 @@ def build(model: dict, load: dict, scene_dir: Path):
     if method == "kachanov":
         if "n_modes" in model:
             raise SceneError("[model] key 'n_modes' only applies to method = 'bem'")
-        net = cn.kachanov_model(cracks, weighting=model.get("weighting", "uniform"), **common)
+        net = cn.kachanov_model(cracks, weighting=model.get("weighting", "uniform"),
+                                interaction_radius=model.get("interaction_radius"), **common)
     elif method == "bem":
-        if "weighting" in model:
-            raise SceneError("[model] key 'weighting' only applies to method = 'kachanov'")
+        for key in ("weighting", "interaction_radius"):
+            if key in model:
+                raise SceneError(f"[model] key {key!r} only applies to method = 'kachanov'")
         net = cn.bem_model(cracks, n_modes=model.get("n_modes", 16), **common)
     else:
         raise SceneError(f"[model] key 'method' = {method!r} must be 'kachanov' or 'bem'")
