@@ -446,8 +446,20 @@ def test_scene_builder_sampled_and_file(tmp_path):
         ({"n_cracks": 3}, {"static": [1, 2]}, "must be a list [sxx, sxy, syy]"),
         ({"n_cracks": 3}, {"q0": [1]}, "key 'q0' is not allowed"),
         ({"half_length": [1, 2, 3]}, {}, "must be a number or [lo, hi]"),
+        ({"method": "bem", "interaction_radius": 5}, {}, "only applies to method = 'kachanov'"),
+        ({"interaction_radius": "near"}, {}, "must be a int or float"),
     ]
     for mdl, ld, words in bad:
         with pytest.raises(SceneError) as info:
             build(mdl, ld, tmp_path)
         assert words in str(info.value), str(info.value)
+
+
+def test_scene_builder_truncated_interaction_is_sparse(tmp_path):
+    from shakedown.scenes.builders.crack_network import build
+
+    system, _, model = build({"n_cracks": 30, "density": 0.1, "seed": 3, "interaction_radius": 4},
+                             {}, tmp_path)
+    assert system.is_sparse and model.is_sparse
+    ref = cn.kachanov_model(cn.sample_crack_set(30, density=0.1, rng=3), interaction_radius=4)
+    np.testing.assert_array_equal(system.K.toarray(), ref.system.K.toarray())
