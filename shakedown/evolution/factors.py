@@ -226,7 +226,8 @@ class FactorCache:
             self._keep_rows(F)
             return self._lu_solve(F, q0, p0)
         B0 = self._base
-        if (B0 is not None and B0.free.size >= self.update_min_size
+        # sparse: a fresh SuperLU factor (~1 ms at N = 2000) beats a dense Woodbury update
+        if (not self.sparse and B0 is not None and B0.free.size >= self.update_min_size
                 and np.count_nonzero(s != B0.s) <= max(
                     self.max_update_rank, self.update_fraction * B0.free.size)):
             z = self._woodbury(B0, s, q0, p0)
