@@ -42,9 +42,15 @@ class HighsModel:
         self.lp = ReusableLP(rows, row_lo, row_hi, col_lo, col_hi, cost)
         self.worst = dict.fromkeys(RESIDUAL_NAMES, 0.0)
 
-    def run(self, sense: str, tight=(), separation: bool = False, cost=None) -> LPAnswer:
-        """Optimise ``lam`` (or ``cost . (v, lam)``) with rows ``tight`` held tight."""
+    def run(self, sense: str, tight=(), separation: bool = False, cost=None,
+            method: str = "simplex") -> LPAnswer:
+        """Optimise ``lam`` (or ``cost . (v, lam)``) with rows ``tight`` held tight.
+
+        ``method="ipm"``: HiGHS's interior point with crossover (a basis for the next warm
+        starts), for a cold start on a large sparse model."""
         lp = self.lp
+        if method != "simplex":
+            lp._h.setOptionValue("solver", method)
         if cost is None:
             cost = np.zeros(self.n + 1)
             cost[self.n] = 1.0
@@ -55,6 +61,8 @@ class HighsModel:
             for j in range(self.n):
                 lp.set_row_bounds(2 * self.n + j, -np.inf, self.sep_c[j])
         ans = lp.solve()
+        if method != "simplex":
+            lp._h.setOptionValue("solver", "simplex")
         for k in tight:
             lp.set_row_bounds(k, -np.inf, self.c[k])
         if separation:
@@ -83,7 +91,10 @@ def solve_highs(cs: ConstraintSet, has_periodic_part: bool, intervals, adjacency
     scale_m = np.abs(cs.m).max(initial=0.0)
     messages = []
 
-    main = eng.run("max")
+    sparse = sp.issparse(cs.G)
+    # a large sparse model: interior point + crossover from cold (2.8x faster than the dual
+    # simplex at N = 1000, and 30x smaller residuals), then simplex warm starts
+    main = eng.run("max", method="ipm" if sparse else "simplex")
     lam2 = value(main)
     status = "bounded"
     v_at_lam2 = main.x[:n].copy() if main.status == "optimal" else np.zeros(0)
@@ -111,6 +122,9 @@ def solve_highs(cs: ConstraintSet, has_periodic_part: bool, intervals, adjacency
     out = PathOutcome(lam1=np.nan, lam2=lam2, status=status, messages=messages,
                       lam_low=np.full(2 * n, np.nan), lam_high=np.full(2 * n, np.nan),
                       v_at_lam2=v_at_lam2, certificate=certificate)
+    sep_answer = None
+    if sparse and separation and status != "infeasible":  # next to the lam2 basis: cheap
+        sep_answer = eng.run("max", separation=True)
     pruned = None
     if (intervals == "lam1" and sp.issparse(cs.G) and status == "bounded"
             and main.status == "optimal"):
@@ -144,7 +158,9 @@ def solve_highs(cs: ConstraintSet, has_periodic_part: bool, intervals, adjacency
             if np.isfinite(a) and a < out.lam_adj:
                 out.lam_adj, out.adj_node = a, j
     if separation and status != "infeasible":
-        out.lam_sep, out.sep_nodes = separation_outcome(eng.run("max", separation=True), lam2, n)
+        if sep_answer is None:
+            sep_answer = eng.run("max", separation=True)
+        out.lam_sep, out.sep_nodes = separation_outcome(sep_answer, lam2, n)
     out.residuals = dict(eng.worst)
     out.n_lps = eng.lp.n_solves
     out.iterations = eng.lp.total_iterations

@@ -97,3 +97,33 @@ def test_sparse_lam1_zero_cases_take_the_exact_path(seed, never):
     assert b.lam_high_exact.all() and b.limiting_constraint == e.limiting_constraint
     assert np.isnan(b.lam_high).any() == never
     np.testing.assert_allclose(b.lam_low, e.lam_low, rtol=1e-7, atol=1e-9)
+
+
+@pytest.mark.parametrize("skip", [("family_vertices",), ("family_vertices", "cover")])
+def test_sparse_lam_low_paths_agree(monkeypatch, skip):
+    """The lam_low phase without its cheap steps (the family points; then the covering LPs
+    too): the per-row LPs alone give the same lam1 and every lam_low = 0."""
+    m, load = network(50, 4, 9)
+    ref = sd.shakedown_bounds(m.system, load)
+    for name in skip:
+        monkeypatch.setattr(highs_pruning, name, lambda *a, **k: 0)
+    b = sd.shakedown_bounds(m.system, load)
+    assert b.lam1 == pytest.approx(ref.lam1, rel=1e-9)
+    assert b.limiting_constraint == ref.limiting_constraint
+    np.testing.assert_allclose(b.lam_low, 0.0, atol=1e-9)
+    assert b.n_lps > ref.n_lps  # the skipped steps did save LPs
+
+
+def test_family_point_outside_the_region_decides_nothing():
+    """A family point that violates a row of the other family proves nothing (wrong-answer check
+    of the cheap covering step)."""
+    m, load = network(30, 3, 7)
+    cs0 = extreme_constraints(m.system, load)
+    ch = Scales.of(cs0).nondimensional(cs0)
+    lam_big = 50.0  # far beyond lam2: H is empty, no point can be in it
+    undecided = np.ones(60, bool)
+    highs_pruning.family_vertices(ch, lam_big, undecided)
+    assert undecided.all()
+    undecided = np.ones(60, bool)
+    highs_pruning.family_vertices(ch, 0.0, undecided)
+    assert not undecided.all()  # at lam = 0 under compression both family points are safe
