@@ -206,7 +206,8 @@ class SafeRegion:
         """Vertices (counter-clockwise) of a bounded two-node region; empty array if empty."""
         if self.normals.shape[1] != 2:
             raise InputError("vertices_2d is for two-node systems")
-        return _polygon_2d(self.normals, self.offsets)
+        G = self.normals.toarray() if sp.issparse(self.normals) else self.normals
+        return _polygon_2d(G, self.offsets)
 
     def area(self) -> float:
         """Area of a bounded two-node region (0 when empty) [length^2]."""
@@ -219,7 +220,7 @@ class SafeRegion:
 
 def _row_scale(G, b, x):
     """Force scale of each row of ``G x <= b`` at ``x``: ``max|G| max|x| + |b|`` (> 0)."""
-    s = np.abs(G).max(initial=0.0) * np.abs(x).max(initial=0.0) + np.abs(b)
+    s = abs_max(G) * np.abs(x).max(initial=0.0) + np.abs(b)
     return np.maximum(s, np.finfo(float).tiny)
 
 

@@ -1,26 +1,30 @@
-"""``lam1`` by HiGHS with shared vertices: the activity intervals a sparse ``G`` needs (issue 14).
+"""``lam1`` by HiGHS with shared vertices: the activity intervals of a sparse ``G`` (issue 14).
 
 The dense path prunes the ``lam_high`` LPs with a facet walk on a dense ``G``
 (:mod:`.pruning`).  On a sparse constraint set (a truncated crack interaction, a user's sparse
-``K``) every LP is solved by HiGHS on the sparse matrix, and the same two facts cut the number
-of LPs from ``4N`` to a few dozen:
+``K``) every LP is solved by HiGHS on the sparse matrix, and three facts cut the work:
 
-* **Shared vertices.**  Every certified optimum ``(v*, lam*)`` of a "min/max lam with row k
-  tight" LP is a point of ``H(lam*)``; each row ``j`` tight there has a non-empty face at
-  ``lam*``.  A vertex at ``lam* = 0`` proves ``lam_low_j = 0`` for all its tight rows (about
-  ``N`` of them).
+* **Family points** (``lam_low``).  The point where every ``I`` row (or every ``II`` row) is
+  tight is one sparse solve; when it lies in ``H(lam)`` it proves a non-empty face for all
+  ``N`` rows of the family.  At ``lam = 0`` under a compressive static load both family points
+  are in ``H(0)`` (the all-``I`` point is safe exactly when every normal reaction there stays
+  compressive), so every ``lam_low = 0`` costs two sparse solves.  Rows left get covering LPs
+  (``lam`` fixed, the sum of their normals maximised) and then one LP each.
+* **Shared vertices.**  Every certified optimum ``(v*, lam*)`` is a point of ``H(lam*)``; each
+  row tight there has a non-empty face at ``lam*``.
 * **Incumbent pruning** (as :mod:`.pruning`): once every ``lam_low = 0``, ``lam1 = min_k
   lam_high_k``.  With the incumbent ``t`` (the smallest exact ``lam_high`` so far, first
   ``lam2``), row ``k`` only needs the capped LP ``max lam`` with row ``k`` tight and
-  ``lam <= t``: a value below ``t`` is row ``k``'s exact ``lam_high`` and the new incumbent; a
-  binding cap proves ``lam_high_j >= t`` for every row ``j`` tight at the optimum.
+  ``lam <= t`` (a few dual simplex pivots from the previous basis): a value below ``t`` is row
+  ``k``'s exact ``lam_high`` and the new incumbent; a binding cap proves ``lam_high_j >= t``
+  for every row ``j`` tight at the optimum.  Rows are visited in order of decreasing slack at
+  the ``lam2`` optimum (the facets farthest from the last safe state leave first).
 
-Rows are visited in order of decreasing slack at the ``lam2`` optimum (the facets farthest
-from the last safe state are the first candidates to leave).  Each answer is certified by
-:class:`~.lp.ReusableLP` (primal and dual feasibility, stationarity, complementarity), and a
-row counts as tight at a vertex when its slack is below :data:`TIGHT_RTOL` of its force scale.
-Result: per row the exact ``lam_high`` (``hi_exact``) or a proven lower bound ``>=`` the final
-``lam1``; every ``lam_low`` exact.
+Each LP answer is certified by :class:`~.lp.ReusableLP` (primal and dual feasibility,
+stationarity, complementarity); a family point by its slack in every row.  A row counts as
+tight when its slack is below :data:`TIGHT_RTOL` of its force scale.  Result: per row the
+exact ``lam_high`` (``hi_exact``) or a proven lower bound ``>=`` the final ``lam1``; every
+``lam_low`` exact.
 """
 
 from __future__ import annotations

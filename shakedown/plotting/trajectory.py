@@ -92,6 +92,7 @@ def plot_trajectory(system, load, lam: float, trajectories=None, ax=None, *, spa
         raise InputError(f"plot_trajectory is for two-node systems; got N = {system.n_nodes}")
     if space not in ("v", "tau"):
         raise InputError(f"space must be 'v' or 'tau'; got {space!r}")
+    system = system.to_dense()  # two nodes: the plot works on dense 2 x 2 blocks
     ax = _new_ax(ax)
     G, b_ext, b_inst = _lines(system, load, float(lam), times)
     T = np.eye(2) if space == "v" else system.A  # point map v -> plotted coordinates

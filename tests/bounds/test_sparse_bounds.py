@@ -127,3 +127,32 @@ def test_family_point_outside_the_region_decides_nothing():
     undecided = np.ones(60, bool)
     highs_pruning.family_vertices(ch, 0.0, undecided)
     assert not undecided.all()  # at lam = 0 under compression both family points are safe
+
+
+def test_loose_sparse_answer_is_solved_again():
+    """A simplex answer whose own certificate is loose (here: corrupted x, residual 1e-3) is
+    solved again by interior point + crossover; the dense reference path keeps HiGHS's answer."""
+    import dataclasses
+
+    from shakedown.bounds.highs_path import HighsModel
+
+    m, load = network(30, 3, 2)
+    cs0 = extreme_constraints(m.system, load)
+    ch = Scales.of(cs0).nondimensional(cs0)
+    eng = HighsModel(ch)
+    good = eng.run("max")
+    real = eng.lp.solve
+    calls = []
+
+    def corrupt():
+        ans = real()
+        calls.append(ans)
+        if len(calls) == 1:  # the first answer is off by 1e-3 in every slip
+            return dataclasses.replace(ans, x=ans.x + 1e-3, primal_residual=1e-3)
+        return ans
+
+    eng.lp.solve = corrupt
+    again = eng.run("max")
+    assert eng.resolved == 1 and len(calls) == 2
+    assert again.max_residual < 1e-6
+    assert again.x[-1] == pytest.approx(good.x[-1], rel=1e-8)

@@ -161,3 +161,17 @@ def test_wrong_sparse_factor_is_caught(monkeypatch):
     assert bad.status == "step_failed" or np.allclose(bad.dissipation[-1], good.dissipation[-1],
                                                       rtol=1e-6)
     assert bad.status == "step_failed", "a 1e-3 error in every solve must not pass the checks"
+
+
+def test_sparse_steady_cycle_and_plot_inputs_equal_dense():
+    """The steady-cycle solver (Anderson on the period map) and the two-node plot helpers take a
+    sparse system like its dense twin."""
+    rng = np.random.default_rng(4)
+    d = banded(15, 4)
+    load = load_of(rng, d, amp=3.0)
+    a = sd.steady_cycle(d.to_sparse(), load, 1.5, steps_per_cycle=16)
+    b = sd.steady_cycle(d, load, 1.5, steps_per_cycle=16)
+    assert a.status == b.status == "converged"
+    W = max(abs(b.steady_dissipation), 1e-300)
+    assert abs(a.steady_dissipation - b.steady_dissipation) <= 1e-9 * W
+    np.testing.assert_array_equal(a.stuck_nodes, b.stuck_nodes)
