@@ -63,7 +63,8 @@ def realisation_model(spec: SweepSpec, r: int):
         kw["orientation"] = None  # sample_crack_set: None = uniform in [0, pi)
     cracks = cn.sample_crack_set(spec.n_cracks, rng=np.random.default_rng(ss), **kw)
     model = cn.kachanov_model(cracks, shear_modulus=spec.shear_modulus,
-                              poisson_ratio=spec.poisson_ratio, friction=spec.friction)
+                              poisson_ratio=spec.poisson_ratio, friction=spec.friction,
+                              interaction_radius=spec.interaction_radius)
     load = model.load_cycle(static=spec.static, cyclic=spec.cyclic)
     return cracks, model, load
 

@@ -13,7 +13,7 @@ __all__ = ["SweepSpec"]
 _SOLVER_FIELDS = ("method", "steps_per_cycle", "max_cycles", "tol")
 _SAMPLER_FIELDS = ("density", "half_length", "orientation", "min_spacing")
 _MODEL_FIELDS = ("n_cracks", *_SAMPLER_FIELDS, "seed", "shear_modulus", "poisson_ratio",
-                 "friction")
+                 "friction", "interaction_radius")
 
 
 @dataclass(frozen=True)
@@ -31,6 +31,10 @@ class SweepSpec:
         Passed to ``sample_crack_set`` (``None``: its default; ``orientation="uniform"``:
         angles uniform in ``[0, pi)``).
     shear_modulus, poisson_ratio, friction : float
+    interaction_radius : float, optional
+        Truncate Kachanov's interaction to pairs closer than ``interaction_radius (a_i + a_j)``:
+        each realisation's system is then sparse (``crack_networks.kachanov_model``; its error
+        against the full interaction: ``benchmarks/RESULTS_kachanov_assembly.md``).
     static, cyclic : tuple of 3 floats
         Far-field stresses ``(sxx, sxy, syy)``; default the seed's ``S0 = p0 (-1, 0, -1)``,
         ``S1 = p0 (0, 1, 0)`` with ``p0 = 1``.
@@ -68,6 +72,7 @@ class SweepSpec:
     shear_modulus: float = 1.0
     poisson_ratio: float = 0.25
     friction: float = 0.6
+    interaction_radius: float | None = None
     static: tuple = (-1.0, 0.0, -1.0)
     cyclic: tuple = (0.0, 1.0, 0.0)
     n_realisations: int = 1
@@ -121,6 +126,11 @@ class SweepSpec:
         for name in ("shear_modulus", "state_scale"):
             if not float(getattr(self, name)) > 0:
                 raise InputError(f"{name} must be > 0; got {getattr(self, name)!r}")
+        r = self.interaction_radius
+        if r is not None and (isinstance(r, bool) or not isinstance(r, int | float | np.floating)
+                              or not np.isfinite(r) or not r > 0):
+            raise InputError(f"interaction_radius must be a positive number of crack lengths "
+                             f"(e.g. 12) or omitted; got {r!r}")
         if not max(map(abs, self.cyclic)) > 0:
             raise InputError("cyclic must not be zero: the study sweeps the cyclic load factor")
 

@@ -185,3 +185,31 @@ def test_verdict_states_the_band_cyclic_slip_below_lam1_and_lam_u():
     assert "between lam_adj = 0.5 and lam1: 1 of 4" in text
     assert "from lam_u = 4 (lam_u/lam2 = 2) on" in text
     assert "for lam >= 4 (lam/lam2 = 2)" in text
+
+
+def test_study_on_truncated_sparse_networks(tmp_path):
+    """interaction_radius in the study: every realisation's system is sparse, and with a radius
+    that keeps every pair the rows equal the full-interaction study's."""
+    from dataclasses import replace
+
+    import crack_networks as cn
+    from shakedown.model.errors import InputError
+    from shakedown.studies.crack_study import realisation_model
+    from shakedown.studies.sweep import SweepSpec, run_sweep
+
+    full = SweepSpec(n_cracks=8, density=0.1, lams=(0.3, 0.9), n_states=3, steps_per_cycle=16,
+                     max_cycles=60, seed=5)
+    wide = replace(full, interaction_radius=1e6)  # keeps every pair, but sparse
+    _, model, _ = realisation_model(wide, 0)
+    assert model.system.is_sparse
+    assert isinstance(model, cn.KachanovModel)
+    a = run_sweep(full, tmp_path / "full", n_workers=1, progress=False).summary
+    b = run_sweep(wide, tmp_path / "wide", n_workers=1, progress=False).summary
+    np.testing.assert_allclose(b["lam"], a["lam"], rtol=1e-12)
+    scale = float(a["W_star_max"].max())
+    for col in ("W_star_min", "W_star_max"):
+        np.testing.assert_allclose(b[col], a[col], rtol=1e-7, atol=1e-9 * scale)
+    for col in ("n_shook_down", "n_cyclic_slip"):
+        np.testing.assert_array_equal(b[col], a[col])
+    with pytest.raises(InputError, match="interaction_radius"):
+        replace(full, interaction_radius=-1.0)
