@@ -98,8 +98,12 @@ def check_sparse_conditioning(name: str, K: sp.spmatrix, *, max_condition: float
             "sparse LU factorisation). A reduced stiffness of a body held against rigid-body "
             "motion is always SPD: check the signs and the condensation")
     piv = lu.U.diagonal()
-    symmetric_pivots = np.array_equal(lu.perm_r, lu.perm_c)
-    if not symmetric_pivots or np.any(~(piv > 0)):
+    if not np.array_equal(lu.perm_r, lu.perm_c):  # SuperLU left the diagonal: no inertia
+        lmin = float(spla.eigsh(sp.csr_matrix(K), k=1, which="SA",
+                                return_eigenvectors=False)[0]) if K.shape[0] > 2 \
+            else float(np.linalg.eigvalsh(K.toarray())[0])
+        piv = np.array([lmin])
+    if np.any(~(piv > 0)):
         neg = int(np.count_nonzero(~(piv > 0)))
         raise NotPositiveDefiniteError(
             f"{name} must be positive definite; its sparse LDL^T factorisation has {neg} "

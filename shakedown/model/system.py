@@ -220,10 +220,9 @@ class DiscreteSystem:
         K.eliminate_zeros()
         K.sort_indices()
         del A, B, C
-        lu = _sparse.check_sparse_conditioning("K = [[A, B], [B^T, C]]", K,
-                                               max_condition=MAX_CONDITION)
-        self.__dict__["K"] = K
-        self.__dict__["_sparse_lu"] = lu
+        _sparse.check_sparse_conditioning("K = [[A, B], [B^T, C]]", K,
+                                          max_condition=MAX_CONDITION)
+        self.__dict__["K"] = K  # (no factor kept: a system is pickled to worker processes)
         object.__setattr__(self, "A", K[:n, :n].tocsr())
         object.__setattr__(self, "B", K[:n, n:].tocsr())
         object.__setattr__(self, "C", K[n:, n:].tocsr())
@@ -285,8 +284,7 @@ class DiscreteSystem:
     def condition_number(self) -> float:
         """2-norm condition number of ``K`` (Lanczos estimate for a sparse ``K``)."""
         if self.is_sparse:
-            lu = self.__dict__.get("_sparse_lu")
-            return _sparse.largest_eigenvalue(self.K) / _sparse.smallest_eigenvalue(self.K, lu)
+            return _sparse.largest_eigenvalue(self.K) / _sparse.smallest_eigenvalue(self.K)
         ev = np.linalg.eigvalsh(self.K)
         return float(ev[-1] / ev[0])
 
@@ -382,7 +380,7 @@ class DiscreteSystem:
             return result(self._critical_factor_by_enumeration(), True, "enumeration")
         if self.is_sparse:
             # (A - B C^-1 B^T)^-1 is the leading block of K^-1: Lanczos with solves, no dense Schur
-            lmin = _sparse.smallest_schur_eigenvalue(self.K, n, self.__dict__.get("_sparse_lu"))
+            lmin = _sparse.smallest_schur_eigenvalue(self.K, n)
             Fs = sp.diags(f)
             lmax = _sparse.largest_eigenvalue(sp.csr_matrix(Fs @ self.C @ Fs))
             return result(min(np.sqrt(max(lmin, 0.0) / lmax), upper), False, "sufficient-bound")

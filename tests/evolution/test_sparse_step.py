@@ -83,7 +83,7 @@ def test_sparse_solver_never_densifies_and_uses_superlu(monkeypatch):
 
 def test_sparse_many_nodes_change_state_at_once():
     """A load jump from zero to beyond gross slip: every node slips in the first step; the
-    Woodbury updates on a SuperLU base and the fresh factorizations agree with the dense LU."""
+    SuperLU factorizations agree with the dense LU and its Woodbury updates."""
     rng = np.random.default_rng(3)
     d = banded(300, 3)
     load = load_of(rng, d, amp=6.0)

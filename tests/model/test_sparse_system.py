@@ -102,3 +102,14 @@ def test_mixed_dense_and_sparse_blocks_give_a_sparse_system():
     s = sd.DiscreteSystem(sp.csr_matrix(d.A), d.B, d.C, d.friction)
     assert s.is_sparse
     np.testing.assert_array_equal(s.K.toarray(), d.K)
+
+
+def test_sparse_system_pickles():
+    """Studies send systems to worker processes: a sparse system survives pickling."""
+    import pickle
+
+    s = banded(12).to_sparse()
+    t = pickle.loads(pickle.dumps(s))
+    assert t.is_sparse
+    np.testing.assert_array_equal(t.K.toarray(), s.K.toarray())
+    assert t.condition_number == pytest.approx(s.condition_number, rel=1e-10)
