@@ -156,3 +156,33 @@ def test_loose_sparse_answer_is_solved_again():
     assert eng.resolved == 1 and len(calls) == 2
     assert again.max_residual < 1e-6
     assert again.x[-1] == pytest.approx(good.x[-1], rel=1e-8)
+
+
+@pytest.mark.parametrize("case", ["one node", "uncoupled", "frictionless"])
+def test_sparse_extremes_equal_dense(case):
+    """One node, B = 0 (lam1 = lam2, the frictional Melan theorem) and f = 0, sparse against
+    dense: bounds and a cyclic run."""
+    rng = np.random.default_rng(3)
+    n = 1 if case == "one node" else 12
+    M = rng.normal(size=(2 * n, 2 * n)) * (rng.random((2 * n, 2 * n)) < 0.2)
+    K = M @ M.T + 2 * n * np.eye(2 * n)
+    if case == "uncoupled":
+        K[:n, n:] = 0.0
+        K[n:, :n] = 0.0
+    f = 0.0 if case == "frictionless" else 0.4
+    d = sd.DiscreteSystem(K[:n, :n], K[:n, n:], K[n:, n:], f)
+    s = d.to_sparse()
+    load = sd.LoadCycle.from_harmonics(0.1 * rng.normal(size=n), np.full(n, 1.0),
+                                       q_cos=rng.normal(size=n))
+    a, b = sd.shakedown_bounds(s, load), sd.shakedown_bounds(d, load)
+    assert a.status == b.status
+    for name in ("lam1", "lam2"):
+        x, y = getattr(a, name), getattr(b, name)
+        assert (x == y) or x == pytest.approx(y, rel=1e-7), name
+    if case == "uncoupled":
+        assert a.lam1 == pytest.approx(a.lam2, rel=1e-9)
+    ra = sd.solve_cycles(s, load, 1.3, steps_per_cycle=16, max_cycles=30)
+    rb = sd.solve_cycles(d, load, 1.3, steps_per_cycle=16, max_cycles=30)
+    assert ra.status == rb.status
+    np.testing.assert_allclose(ra.dissipation, rb.dissipation, rtol=1e-9,
+                               atol=1e-12 * max(1.0, abs(rb.dissipation).max()))
