@@ -186,3 +186,21 @@ def test_sparse_extremes_equal_dense(case):
     assert ra.status == rb.status
     np.testing.assert_allclose(ra.dissipation, rb.dissipation, rtol=1e-9,
                                atol=1e-12 * max(1.0, abs(rb.dissipation).max()))
+
+
+def test_sparse_degenerate_twin_network():
+    """A network and its uncoupled copy side by side (every constraint tied with its twin, a
+    degenerate LP at every vertex): the same lam1 and lam2 as the single network."""
+    m, load = network(25, 3, 6)
+    s = m.system
+    two = sd.DiscreteSystem(sp.block_diag([s.A, s.A]), sp.block_diag([s.B, s.B]),
+                            sp.block_diag([s.C, s.C]), np.r_[s.friction, s.friction])
+    parts = {k: np.hstack([getattr(load, k), getattr(load, k)])
+             for k in ("q_cos", "q_sin", "p_cos", "p_sin") if getattr(load, k) is not None}
+    load2 = sd.LoadCycle.from_harmonics(np.r_[load.q0, load.q0], np.r_[load.p0, load.p0], **parts)
+    one, both = sd.shakedown_bounds(s, load), sd.shakedown_bounds(two, load2)
+    assert two.is_sparse
+    assert both.lam1 == pytest.approx(one.lam1, rel=1e-7)
+    assert both.lam2 == pytest.approx(one.lam2, rel=1e-7)
+    assert both.limiting_constraint % 25 == one.limiting_constraint % 25 or \
+        both.lam_high[one.limiting_constraint] == pytest.approx(one.lam1, rel=1e-7)
