@@ -16,6 +16,10 @@
     ``variables`` : table renaming the arrays read from ``.mat`` / ``.npz`` files, e.g.
     ``{A = "Ktt", B = "Ktn", C = "Knn", K = "Kred", friction = "mu", stiffness = "KGLOB"}``.
     ``friction`` : number or list of N (overrides the file's); ``symmetry_rtol`` : number.
+    ``sparse`` : true keeps ``K_file`` / ``A_file``, ``B_file``, ``C_file`` (and the arrays of
+    ``file``) as ``scipy.sparse`` matrices: the system is then sparse and the cyclic runs and
+    the bounds use it without densifying (not with ``stiffness_file``: a condensed stiffness
+    is dense).
 ``[load]`` keys
     ``q0``, ``p0`` : lists of N [force]; then either harmonics ``q_cos``, ``q_sin``, ``p_cos``,
     ``p_sin`` (lists of N or of lists of N) or samples ``q1``, ``p1`` (lists of lists of N);
@@ -35,9 +39,11 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import scipy.sparse as sp
 
 from ...model.errors import InputError, SceneError
 from ...model.loading import LoadCycle
+from ...model.sparse import abs_max
 from ...model.system import SYMMETRY_RTOL, DiscreteSystem
 from ...models.formats import condense_stiffness, read_load_record, read_matrix, read_vector
 from ...models.formats.readers import container_names, read_array
@@ -45,7 +51,7 @@ from ...models.formats.readers import container_names, read_array
 STIFFNESS_KEYS = ("stiffness_file", "tangential_dofs", "normal_dofs", "fixed_dofs",
                   "tangential_sign", "normal_sign", "dof_base")
 MODEL_KEYS = ("A", "B", "C", "file", "K_file", "A_file", "B_file", "C_file", *STIFFNESS_KEYS,
-              "variables", "friction", "symmetry_rtol")
+              "variables", "friction", "symmetry_rtol", "sparse")
 HARMONIC_KEYS = ("q_cos", "q_sin", "p_cos", "p_sin")
 SAMPLE_KEYS = ("q1", "p1")
 RECORD_KEYS = ("record_file", "period", "n_samples", "t_start", "max_error")
@@ -115,13 +121,19 @@ def _not_a_number(value):
     return None
 
 
-def _split(K: np.ndarray, where: str) -> dict:
-    if K.ndim != 2 or K.shape[0] != K.shape[1] or K.shape[0] % 2:
+def _split(K, where: str) -> dict:
+    if len(K.shape) != 2 or K.shape[0] != K.shape[1] or K.shape[0] % 2:
         raise SceneError(f"{where}: the reduced stiffness K must be square of even size 2N "
                          f"(order v_1..v_N, w_1..w_N); got shape {K.shape}")
     n = K.shape[0] // 2
     # the DiscreteSystem's own symmetry tolerance (SYMMETRY_RTOL = 1e-8 of max|K|: room for
     # matrices written with 10 significant digits), checked here to name the file
+    if sp.issparse(K):
+        K = sp.csr_matrix(K)
+        asym = abs_max(K[:n, n:] - K[n:, :n].T)
+        if asym > SYMMETRY_RTOL * abs_max(K):
+            raise SceneError(f"{where}: K is not symmetric (its B and B^T blocks differ)")
+        return {"A": K[:n, :n], "B": K[:n, n:], "C": K[n:, n:]}
     if not np.allclose(K[:n, n:], K[n:, :n].T, rtol=0, atol=SYMMETRY_RTOL * np.abs(K).max()):
         raise SceneError(f"{where}: K is not symmetric (its B and B^T blocks differ)")
     return {"A": K[:n, :n], "B": K[:n, n:], "C": K[n:, n:]}
@@ -138,16 +150,23 @@ def _model_data(model: dict, scene_dir: Path):
         raise SceneError("[model] keys " + ", ".join(k for k in STIFFNESS_KEYS if k in model)
                          + " need 'stiffness_file'")
     data, condensed = {}, None
+    sparse = model.get("sparse", False)
+    if not isinstance(sparse, bool):
+        raise SceneError(f"[model] key 'sparse' = {sparse!r} must be true or false")
+    if sparse and "stiffness_file" in model:
+        raise SceneError("[model] sparse = true does not apply to 'stiffness_file': the "
+                         "condensed stiffness on the contact nodes is dense")
     if "file" in model:
         data.update(_container(scene_dir / str(model["file"]), "model", names))
         if "K" in data and "A" not in data:
             data.update(_split(data.pop("K"), f"[model] file {model['file']!r}"))
     if "K_file" in model:
-        K = read_matrix(scene_dir / str(model["K_file"]), names.get("K"))
+        K = read_matrix(scene_dir / str(model["K_file"]), names.get("K"), sparse=sparse)
         data.update(_split(K, f"[model] K_file {model['K_file']!r}"))
     for key in ("A", "B", "C"):
         if f"{key}_file" in model:
-            data[key] = read_matrix(scene_dir / str(model[f"{key}_file"]), names.get(key))
+            data[key] = read_matrix(scene_dir / str(model[f"{key}_file"]), names.get(key),
+                                    sparse=sparse)
     if "stiffness_file" in model:
         for key in ("tangential_dofs", "normal_dofs"):
             if key not in model:
@@ -180,12 +199,17 @@ def build(model: dict, load: dict, scene_dir: Path):
     for key in ("A", "B", "C", "friction"):
         if key in model:
             data[key] = _array("model", key, model[key])
+    if model.get("sparse") is True:  # every block sparse, whatever its source
+        for key in ("A", "B", "C"):
+            if key in data and not sp.issparse(data[key]):
+                data[key] = sp.csr_matrix(np.asarray(data[key], float))
     for key in ("A", "C"):
         if key not in data:
             raise SceneError(f"[model] key {key!r} is missing (an N x N list, or give 'file', "
                              "'K_file', 'A_file'/'C_file' or 'stiffness_file')")
     if "B" not in data:
-        data["B"] = np.zeros_like(data["A"])
+        data["B"] = (sp.csr_matrix(data["A"].shape) if sp.issparse(data["A"])
+                     else np.zeros_like(data["A"]))
     if "friction" not in data:
         raise SceneError("[model] key 'friction' is missing (a number >= 0 or a list of N)")
     kwargs = {}
