@@ -54,6 +54,10 @@ def test_sparse_runs_equal_dense_runs(seed, lam):
     a = sd.solve_cycles(s, load, lam, steps_per_cycle=24, max_cycles=40)
     b = sd.solve_cycles(d, load, lam, steps_per_cycle=24, max_cycles=40)
     assert_same_run(a, b, d)
+    if b.energy_identity is not None:  # the discrete energy balance, with the sparse K
+        ea, eb = a.energy_identity, b.energy_identity
+        assert ea.discrete_relative_difference < 1e-9
+        assert ea.closed_integral == pytest.approx(eb.closed_integral, rel=1e-9, abs=1e-12)
 
 
 def test_sparse_solver_never_densifies_and_uses_superlu(monkeypatch):
