@@ -45,10 +45,9 @@ INIT_LPS = 1
 PRIORITY = 8
 #: Rows (of largest ``m``) whose "max lam" LPs are screened by a few dual simplex pivots.
 SCREEN_ROWS = 400
-#: Pivots of the first screening round (every screened row) and of the second (the best
-#: :data:`SCREEN_KEEP`).
-SCREEN_PIVOTS = (10, 40)
-SCREEN_KEEP = 48
+#: Screening rounds (successive halving): ``(rows, pivots)``: the best ``rows`` of the
+#: previous round (the first: :data:`SCREEN_ROWS`) get ``pivots`` dual simplex pivots each.
+SCREEN_ROUNDS = ((None, 10), (48, 40), (12, 160))
 #: At most this many LPs of at least :data:`SINGLE_MIN_N` unknowns are solved one by one with
 #: an explicit basis inverse instead of the batched dual simplex.
 SINGLE_MAX = 8
@@ -125,18 +124,19 @@ class _Pruner:
 
         A dual simplex "max lam with row ``k`` tight" stopped after a few pivots sits at a
         dual-feasible basis: its ``lam`` bounds ``lam_high_k`` from above and falls towards it
-        with every pivot.  The first :data:`SCREEN_ROWS` rows of ``order`` get
-        :data:`SCREEN_PIVOTS[0] <SCREEN_PIVOTS>` pivots each, the best :data:`SCREEN_KEEP` of
-        them more; the order of these bounds ranks the candidates (only a heuristic: nothing
-        is concluded from a bound).  An LP that finishes within its pivots is an exact answer
-        and is recorded as such.  On the Kachanov networks this puts the row of ``lam1``
-        among the first few (N = 1000: rank 3 of 999 after 10 pivots; N = 2000: rank 10 of
-        400 after 10 pivots), where the order of ``m`` alone has it at rank 131 / 176.
+        with every pivot.  The first ``max(SCREEN_ROWS, R / 10)`` rows of ``order`` get a few
+        pivots each, the best of them more and so on (:data:`SCREEN_ROUNDS`); the order of
+        the last bounds ranks the candidates (only a heuristic: nothing is concluded from a
+        bound).  An LP that finishes within its pivots is an exact answer and is recorded as
+        such.  On the Kachanov networks this puts the row of ``lam1`` first (N = 2000: rank 10
+        of 400 after 10 pivots, 2 of 48 after 40 more, 0 of 12 after 160 more; N = 1000:
+        rank 3 after 10 pivots), where the order of ``m`` alone has it at rank 176 / 131.
         """
-        rows = [int(k) for k in order[:max(SCREEN_ROWS, INIT_LPS)]]
+        rows = [int(k) for k in order[:max(SCREEN_ROWS, self.R // 10, INIT_LPS)]]
         if not SCREEN_ROWS or len(rows) <= INIT_LPS:
             return order
-        for piv, keep in zip(SCREEN_PIVOTS, (SCREEN_KEEP, INIT_LPS + PRIORITY), strict=True):
+        for keep, piv in SCREEN_ROUNDS:
+            rows = rows if keep is None else rows[:max(keep, INIT_LPS + PRIORITY)]
             ub = np.full(len(rows), np.inf)
 
             def on_answer(g, ans, rows=rows, ub=ub):
@@ -152,7 +152,8 @@ class _Pruner:
             dense_lp.batch_dual_simplex(self.tab, [(k,) for k in rows], max_pivots=piv,
                                         on_answer=on_answer,
                                         skip=lambda g, rows=rows: self.exact[rows[g]])
-            rows = [rows[g] for g in np.argsort(ub, kind="stable")[:keep]]
+            rows = [rows[g] for g in np.argsort(ub, kind="stable")]
+        rows = rows[:INIT_LPS + PRIORITY]
         rest = set(rows)
         return rows + [k for k in order if k not in rest]
 
