@@ -122,3 +122,39 @@ def test_pruning_through_the_single_path(n, seed, monkeypatch):
     assert calls
     h = sd.shakedown_bounds(system, load, solver="highs", separation=False)
     assert fast.lam1 == pytest.approx(h.lam1, rel=1e-6)
+
+
+def test_clamped_finish_of_the_lam2_lp(monkeypatch):
+    """The last resort of ``solve_max`` (a stalled interior point's basis with slightly
+    negative multipliers; N = 2000, seed 2): clamped multipliers and a single-LP dual simplex
+    give the certified optimum (HiGHS agrees); clearly negative multipliers are refused."""
+    from scipy.optimize import linprog
+
+    system, load = _kachanov(60, 3)
+    A, b, e, main, tab = _lp(system, load)
+    ref = linprog(-e, A_ub=A, b_ub=b, bounds=(None, None), method="highs")
+    # a neighbouring basis: swap one basic row for a near-tight non-basic one
+    slack = b - A @ main.x
+    out = [k for k in np.argsort(slack) if k not in set(main.basis.tolist())]
+    for j in out[:20]:
+        T = main.basis.copy()
+        T[int(np.argmin(main.y[T]))] = j
+        t2 = dense_lp.Tableau(A, b, e, np.sort(T))
+        if not t2.singular and t2.y0.min() < 0:
+            break
+    assert not t2.singular and t2.y0.min() < 0
+    ymax = np.abs(t2.y0).max()
+    if t2.y0.min() >= -1e-4 * ymax:
+        ans, tab2 = dense_lp._clamped_finish(A, b, e, t2, 0)
+        assert ans is not None and ans.x[-1] == pytest.approx(-ref.fun, rel=1e-9)
+    t2.y0 = np.minimum(t2.y0, -1e-2 * ymax)  # clearly dual infeasible: not tried
+    assert dense_lp._clamped_finish(A, b, e, t2, 0) == (None, None)
+    # and a tiny negative multiplier on the optimal basis itself: clamped, then certified
+    t3 = dense_lp.Tableau(A, b, e, main.basis)
+    t3.y0 = t3.y0.copy()
+    t3.y0[np.argmin(t3.y0)] = -1e-7 * np.abs(t3.y0).max()
+    assert not t3.dual_feasible
+    ans, _ = dense_lp._clamped_finish(A, b, e, t3, 0)
+    assert ans is not None and ans.status == "optimal"
+    assert ans.x[-1] == pytest.approx(-ref.fun, rel=1e-9)
+    assert max(ans.residuals) <= dense_lp.CERT_TOL
