@@ -6,16 +6,19 @@ smallest exact ``lam_high`` found so far), a constraint whose face is non-empty 
 ``lam_high_k >= t >= lam1`` (its interval is convex and contains 0) and needs no LP.  The
 driver :func:`lam_high_pruned`:
 
-1. solves exactly (batched dual simplex from the ``lam2`` basis) the rows tight at the ``lam2``
+1. solves exactly (dual simplex from the ``lam2`` basis) the rows tight at the ``lam2``
    optimum (``lam_high = lam2``, free) and :data:`INIT_LPS` candidate rows; the smallest value
-   is the first incumbent ``t``.  Candidates: the rows whose offset ``c_k + lam m_k`` falls
+   is the first incumbent ``t``.  Candidates (:data:`SCREEN_MIN_N` nodes or more; below, the
+   :data:`UNSCREENED_LPS` rows of largest slack at the ``lam2`` optimum): the best of a screen
+   (:meth:`_Pruner.screen`) among the rows whose offset ``c_k + lam m_k`` falls
    slowest as ``lam`` grows (largest ``m_k`` of the unit-norm rows; ties: largest slack at the
    ``lam2`` optimum).  As ``lam`` grows the region shrinks by its rows moving in at the rates
    ``-m``; a row that moves in slowly is overtaken by the others and loses contact first.  On
    Kachanov networks this finds an incumbent near ``lam1`` (issue 14: at N = 2000 the rows of
    largest slack gave ``t`` within 3 % of ``lam2`` and walks of hundreds of pivots each);
 2. walks over the vertices of ``H(t)`` (:class:`~.facet_walk.FacetWalk`, from the vertex of
-   the incumbent's optimum), each time towards the not yet decided row of least slack; every
+   the incumbent's optimum), first towards the next :data:`PRIORITY` screened rows, then each
+   time towards the not yet decided row of least slack; every
    certified vertex proves ``lam_high >= t`` for all its tight rows;
 3. a row the walk cannot reach (face empty at ``t``, or undecided after :data:`WALK_CAP`
    pivots) gets an exact LP, ``max lam`` with the row tight and ``lam <= t`` (dual simplex from
@@ -43,8 +46,12 @@ from .outcome import value
 INIT_LPS = 1
 #: Further screened candidates the walk visits first (before the rows of least slack).
 PRIORITY = 8
-#: Rows (of largest ``m``) whose "max lam" LPs are screened by a few dual simplex pivots.
+#: Rows (of largest ``m``) whose "max lam" LPs are screened by a few dual simplex pivots
+#: (problems of at least :data:`SCREEN_MIN_N` nodes; smaller ones solve the
+#: :data:`UNSCREENED_LPS` rows of largest slack at the ``lam2`` optimum exactly, as before).
 SCREEN_ROWS = 400
+SCREEN_MIN_N = 300
+UNSCREENED_LPS = 16
 #: Screening rounds (successive halving): ``(rows, pivots)``: the best ``rows`` of the
 #: previous round (the first: :data:`SCREEN_ROWS`) get ``pivots`` dual simplex pivots each.
 SCREEN_ROUNDS = ((None, 10), (48, 40), (12, 160))
@@ -191,10 +198,15 @@ class _Pruner:
         return failed
 
     def run(self):
-        order = [k for k in np.lexsort((-self.slack0(), -self.m)) if not self.exact[k]]
-        order = self.screen(order)
-        self.exact_lps(order[:INIT_LPS])
-        priority = order[INIT_LPS:INIT_LPS + PRIORITY] if SCREEN_ROWS else []
+        if SCREEN_ROWS and self.n >= SCREEN_MIN_N:
+            order = [k for k in np.lexsort((-self.slack0(), -self.m)) if not self.exact[k]]
+            order = self.screen(order)
+            self.exact_lps(order[:INIT_LPS])
+            priority = order[INIT_LPS:INIT_LPS + PRIORITY]
+        else:  # small problems: short LPs, the screen costs more than it saves
+            order = [k for k in np.argsort(-self.slack0(), kind="stable") if not self.exact[k]]
+            self.exact_lps(order[:UNSCREENED_LPS])
+            priority = []
         walk, t = None, np.inf
         while True:
             if walk is None or self.best[0] < t:

@@ -29,7 +29,9 @@ def init_lps(request, monkeypatch):
     single one chosen without the screening by partial dual simplex runs (the start is then
     far from ``lam1`` and the walks, descents and capped LPs do most of the work)."""
     monkeypatch.setattr(pruning, "INIT_LPS", request.param[0])
+    monkeypatch.setattr(pruning, "UNSCREENED_LPS", request.param[0])
     monkeypatch.setattr(pruning, "SCREEN_ROWS", request.param[1])
+    monkeypatch.setattr(pruning, "SCREEN_MIN_N", 0)  # screen small problems too
     return request.param[0]
 
 
@@ -209,6 +211,7 @@ def test_breaking_the_certificate_check_is_caught(monkeypatch):
     differ from the exact one on a network where pruning matters: the tests above would catch a
     wrong certificate."""
     monkeypatch.setattr(pruning, "INIT_LPS", 1)
+    monkeypatch.setattr(pruning, "UNSCREENED_LPS", 1)
     monkeypatch.setattr(pruning, "SCREEN_ROWS", 0)
     cracks = cn.sample_crack_set(120, density=0.1, half_length=1.0, min_spacing=0.1,
                                  rng=np.random.default_rng(2))
@@ -227,6 +230,7 @@ def test_every_descent_lands_on_the_exact_lam_high(monkeypatch):
     """The parametric descents (face empty at the incumbent: follow lam down) end exactly at
     the row's lam_high of the full computation; a perturbed dual certificate is rejected."""
     monkeypatch.setattr(pruning, "INIT_LPS", 1)
+    monkeypatch.setattr(pruning, "UNSCREENED_LPS", 1)
     monkeypatch.setattr(pruning, "SCREEN_ROWS", 0)
     cracks = cn.sample_crack_set(120, density=0.1, half_length=1.0, min_spacing=0.1,
                                  rng=np.random.default_rng(2))

@@ -108,6 +108,7 @@ def test_pruning_through_the_single_path(n, seed, monkeypatch):
     exact intervals and HiGHS."""
     monkeypatch.setattr(pruning, "SINGLE_MIN_N", 0)
     monkeypatch.setattr(pruning, "SCREEN_ROWS", 0)  # (a screened LP may finish in the screen)
+    monkeypatch.setattr(pruning, "UNSCREENED_LPS", 1)
     monkeypatch.setattr(dual_simplex, "REFACTOR_EVERY", 16)
     calls = []
     orig = pruning.single_dual_simplex
