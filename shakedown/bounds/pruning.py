@@ -56,8 +56,10 @@ UNSCREENED_LPS = 16
 #: previous round (the first: :data:`SCREEN_ROWS`) get ``pivots`` dual simplex pivots each.
 SCREEN_ROUNDS = ((None, 10), (48, 40), (12, 160))
 #: At most this many LPs of at least :data:`SINGLE_MIN_N` unknowns are solved one by one with
-#: an explicit basis inverse instead of the batched dual simplex.
-SINGLE_MAX = 8
+#: an explicit basis inverse instead of the batched dual simplex.  One: the pool amortises its
+#: pricing over several LPs (N = 2000, seed 2: 8 capped LPs of ~4000 pivots took 327 s one by
+#: one against 122 s pooled at 8176575), a lone long LP is faster alone (14 s against 18 s).
+SINGLE_MAX = 1
 SINGLE_MIN_N = 200
 #: Pivots a walk may spend on one target before it goes to an exact LP.
 WALK_CAP = 60

@@ -104,7 +104,7 @@ def test_single_reports_a_pivot_cap_as_failed():
 
 @pytest.mark.parametrize("n,seed", [(120, 2), (80, 5)])
 def test_pruning_through_the_single_path(n, seed, monkeypatch):
-    """lam1 with every few-LP family solved one LP at a time (start LP, capped LPs) equals the
+    """lam1 with every lone LP (start LP, a lone capped LP) solved by the single-LP path equals the
     exact intervals and HiGHS."""
     monkeypatch.setattr(pruning, "SINGLE_MIN_N", 0)
     monkeypatch.setattr(pruning, "SCREEN_ROWS", 0)  # (a screened LP may finish in the screen)
