@@ -82,6 +82,7 @@ def run(n, variant, base, timeout):
     path = base if variant.startswith("base") else str(ROOT)
     env = dict(os.environ, PYTHONPATH=path, OPENBLAS_NUM_THREADS="1")
     cmd = [sys.executable, __file__, "--worker", str(n), variant]
+    load = Path("/proc/loadavg").read_text().split()[0]  # 1-minute load when this run starts
     try:
         p = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=timeout,
                            cwd=path)
@@ -89,7 +90,9 @@ def run(n, variant, base, timeout):
         return dict(n=n, variant=variant, seconds=float("nan"), note=f"timeout {timeout} s")
     if p.returncode:
         return dict(n=n, variant=variant, seconds=float("nan"), note=p.stderr[-300:])
-    return json.loads(p.stdout.strip().splitlines()[-1])
+    out = json.loads(p.stdout.strip().splitlines()[-1])
+    out["load_at_start"] = float(load)
+    return out
 
 
 def main():
@@ -119,6 +122,7 @@ def main():
             row = dict(rs[-1])
             row["seconds"] = statistics.median(secs)
             row["all_seconds"] = secs
+            row["all_load_at_start"] = [r.get("load_at_start") for r in rs]
             row["loadavg"] = Path("/proc/loadavg").read_text().split()[:3]
             rows.append(row)
             print(json.dumps(row), flush=True)

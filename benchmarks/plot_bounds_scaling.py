@@ -1,8 +1,10 @@
 """Plot of bench_bounds_scaling.py's results: seconds and peak RSS against N (log-log), slopes.
 
-Usage: python benchmarks/plot_bounds_scaling.py benchmarks/bounds_scaling_pruned_*.json
+Usage: python benchmarks/plot_bounds_scaling.py FILE.json ... [--as-base FILE.json ...]
 Writes benchmarks/bounds_scaling.png.  Variant names as in the benchmark's docstring; the
-labels below describe the runs of RESULTS_bounds_scaling.md's newest section (baseline b450214).
+labels below describe the runs of RESULTS_bounds_scaling.md's newest section (baseline
+8176575).  The ``new`` rows of the files after ``--as-base`` are plotted as ``base`` (runs of
+the baseline's code made when it was new, e.g. its N = 2000 run of 1226 s).
 """
 
 import json
@@ -16,15 +18,22 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 LABELS = {
-    "new": "new default (intervals='lam1', pruned)",
+    "new": "new default (screened start, single-LP dual simplex)",
     "new-exact": "new, intervals=True (every interval)",
-    "base": "base b450214 default (every interval)",
+    "base": "base 8176575 default (pruned lam1)",
     "base-noadj": "base, adjacency=False",
     "new+adj": "new, adjacency=True",
     "highs": "solver='highs'",
 }
 
-rows = [r for f in sys.argv[1:] for r in json.loads(Path(f).read_text())]
+args = sys.argv[1:]
+cut = args.index("--as-base") if "--as-base" in args else len(args)
+rows = [r for f in args[:cut] for r in json.loads(Path(f).read_text())]
+have = {(r["n"], r["variant"]) for r in rows}
+for f in args[cut + 1:]:
+    for r in json.loads(Path(f).read_text()):
+        if r["variant"] == "new" and (r["n"], "base") not in have:
+            rows.append(dict(r, variant="base"))
 fig, (ax, axm) = plt.subplots(1, 2, figsize=(11, 4.5))
 for variant, label in LABELS.items():
     pts = sorted((r["n"], r["seconds"], r.get("peak_rss_mb", np.nan)) for r in rows

@@ -67,6 +67,7 @@ def solve_max(A, b, e, *, max_iter=80):
         return None, None
     T = identify_basis(As, z, s, n)
     tab = Tableau(A, b, e, T) if T is not None else None
+    first = tab
     if tab is not None and not tab.singular and not tab.dual_feasible:
         tab = _primal_finish(A, b, e, tab) or tab  # a few primal pivots from a feasible basis
     if tab is None or tab.singular or not tab.dual_feasible:
@@ -74,7 +75,7 @@ def solve_max(A, b, e, *, max_iter=80):
         # that the multipliers stay non-negative, then let the dual simplex finish
         T = complete_basis(As, z, s, e, n)
         if T is None:
-            return None, None
+            return _clamped_finish(A, b, e, first, it)
         tab = Tableau(A, b, e, T)
         ymax = max(float(np.abs(tab.y0).max()), np.finfo(float).tiny)
         if not tab.singular and tab.y0.min() >= -1e-6 * ymax:
@@ -84,11 +85,37 @@ def solve_max(A, b, e, *, max_iter=80):
     if tab is not None and not tab.singular and not tab.dual_feasible:
         tab = _primal_finish(A, b, e, tab)
     if tab is None or tab.singular or not tab.dual_feasible:
-        return None, None
+        return _clamped_finish(A, b, e, first, it)
     ans = batch_dual_simplex(tab, [()])[0]
     if ans.status != "optimal":
-        return None, None
+        return _clamped_finish(A, b, e, first, it)
     if ans.iterations:
         tab = Tableau(A, b, e, ans.basis)
+    ans = DenseAnswer(ans.status, ans.x, ans.y, ans.basis, ans.iterations + it, ans.residuals)
+    return ans, tab
+
+
+def _clamped_finish(A, b, e, tab, it):
+    """Last resort of :func:`solve_max` (issue 14: a 2000-crack network whose stalled interior
+    point names a basis that is neither primal feasible nor dual feasible, multipliers down to
+    ``-8e-7``): multipliers that are zero up to the interior point's accuracy (``1e-4`` of the
+    largest) are set to 0 and
+    the dual simplex (:func:`~.dual_simplex.single_dual_simplex`, which recomputes ``x`` and
+    ``y`` of its final basis from scratch) finishes; the answer counts only if certified by its
+    own optimality conditions, else ``(None, None)`` (HiGHS)."""
+    from .dual_simplex import single_dual_simplex
+
+    if tab is None or tab.singular:
+        return None, None
+    ymax = max(float(np.abs(tab.y0).max()), np.finfo(float).tiny)
+    if not tab.y0.min() >= -1e-4 * ymax:  # (a start only: the answer is certified)
+        return None, None
+    tab.y0 = np.maximum(tab.y0, 0.0)
+    ans = single_dual_simplex(tab)
+    if ans.status != "optimal":
+        return None, None
+    tab = Tableau(A, b, e, ans.basis)
+    if tab.singular or not tab.dual_feasible:
+        return None, None
     ans = DenseAnswer(ans.status, ans.x, ans.y, ans.basis, ans.iterations + it, ans.residuals)
     return ans, tab

@@ -116,28 +116,35 @@ class FacetWalk:
         return self._walk(np.asarray(g, float), -1, cap) is False and not self.broken
 
     def _walk(self, g, k, cap):
+        y = None  # multipliers B^-T g, updated with the basis (recomputed after a reinversion)
         for it in range(cap + 1):
             if self.broken:
                 return None
             if k >= 0 and self.covered[k]:
                 return True
-            y = self.Binv.T @ g
+            if y is None or it % 32 == 0:
+                y = self.Binv.T @ g
             r = int(np.argmin(y))
             optimal = y[r] >= -1e-11 * max(float(np.abs(y).max()), 1e-300)
+            if optimal and it % 32:  # decide on fresh multipliers, not updated ones
+                y = self.Binv.T @ g
+                r = int(np.argmin(y))
+                optimal = y[r] >= -1e-11 * max(float(np.abs(y).max()), 1e-300)
             if optimal or it == cap:
                 if not self._certify():
                     return None
                 return True if k >= 0 and self.covered[k] else (False if optimal else None)
             d = -self.Binv[:, r]  # G_T d = -e_r: row T_r loosens, the others stay tight
-            GX = self.G @ np.column_stack([self.x, d])  # one pass over G: check x, price d
+            # two matrix-vector products (faster than one product with a 2-column matrix)
             before = self.reinversions
-            if not self._certify(GX[:, 0]):
+            if not self._certify(self.G @ self.x):
                 return None
             if k >= 0 and self.covered[k]:
                 return True
             if self.reinversions != before:  # the check re-inverted: price again
+                y = None
                 continue
-            Gd = GX[:, 1]
+            Gd = self.G @ d
             ok = (Gd > STEP_TOL) & ~self.inb
             if not ok.any():
                 return None  # unbounded direction: cannot happen with k among the rows
@@ -148,8 +155,10 @@ class FacetWalk:
             step = float(ratio[p])
             w = self.G[p] @ self.Binv
             w[r] -= 1.0
-            # Binv -= (d / Gd_p) w^T, in place (BLAS rank-1 update on the transposed view)
+            # Binv -= (d / Gd_p) w^T, in place (BLAS rank-1 update on the transposed view);
+            # then y = Binv^T g changes by -(g.d / Gd_p) w = (y_r / Gd_p) w
             self.Binv = sla.blas.dger(-1.0 / Gd[p], w, d, a=self.Binv.T, overwrite_a=True).T
+            y = y + (y[r] / Gd[p]) * w
             self.x = self.x + step * d
             self.inb[self.T[r]] = False
             self.inb[p] = True
@@ -178,9 +187,8 @@ class FacetWalk:
                 return None
             x = self.Binv @ (c[self.T] + lam * m[self.T])
             dx = self.Binv @ m[self.T]
-            GX = G @ np.column_stack([x, dx])
-            sl = c + lam * m - GX[:, 0]
-            ds = m - GX[:, 1]  # s(lam - tau) = sl - tau ds
+            sl = c + lam * m - G @ x
+            ds = m - G @ dx  # s(lam - tau) = sl - tau ds
             cand = ~self.inb & (ds > STEP_TOL)
             cand[k] = False
             tau = np.where(cand, np.maximum(sl, 0.0) / np.where(cand, ds, 1.0), np.inf)

@@ -6,11 +6,19 @@ smallest exact ``lam_high`` found so far), a constraint whose face is non-empty 
 ``lam_high_k >= t >= lam1`` (its interval is convex and contains 0) and needs no LP.  The
 driver :func:`lam_high_pruned`:
 
-1. solves exactly (batched dual simplex from the ``lam2`` basis) the rows tight at the ``lam2``
-   optimum (``lam_high = lam2``, free) and :data:`INIT_LPS` rows of largest slack there; the
-   smallest value is the first incumbent ``t``;
+1. solves exactly (dual simplex from the ``lam2`` basis) the rows tight at the ``lam2``
+   optimum (``lam_high = lam2``, free) and :data:`INIT_LPS` candidate rows; the smallest value
+   is the first incumbent ``t``.  Candidates (:data:`SCREEN_MIN_N` nodes or more; below, the
+   :data:`UNSCREENED_LPS` rows of largest slack at the ``lam2`` optimum): the best of a screen
+   (:meth:`_Pruner.screen`) among the rows whose offset ``c_k + lam m_k`` falls
+   slowest as ``lam`` grows (largest ``m_k`` of the unit-norm rows; ties: largest slack at the
+   ``lam2`` optimum).  As ``lam`` grows the region shrinks by its rows moving in at the rates
+   ``-m``; a row that moves in slowly is overtaken by the others and loses contact first.  On
+   Kachanov networks this finds an incumbent near ``lam1`` (issue 14: at N = 2000 the rows of
+   largest slack gave ``t`` within 3 % of ``lam2`` and walks of hundreds of pivots each);
 2. walks over the vertices of ``H(t)`` (:class:`~.facet_walk.FacetWalk`, from the vertex of
-   the incumbent's optimum), each time towards the not yet decided row of least slack; every
+   the incumbent's optimum), first towards the next :data:`PRIORITY` screened rows, then each
+   time towards the not yet decided row of least slack; every
    certified vertex proves ``lam_high >= t`` for all its tight rows;
 3. a row the walk cannot reach (face empty at ``t``, or undecided after :data:`WALK_CAP`
    pivots) gets an exact LP, ``max lam`` with the row tight and ``lam <= t`` (dual simplex from
@@ -30,11 +38,29 @@ from __future__ import annotations
 import numpy as np
 
 from . import dense_lp
+from .dual_simplex import single_dual_simplex
 from .facet_walk import FacetWalk, certified_rows, vertex_rows
 from .outcome import value
 
 #: Exact "max lam" LPs solved first (rows of largest slack at the lam2 optimum).
-INIT_LPS = 16
+INIT_LPS = 1
+#: Further screened candidates the walk visits first (before the rows of least slack).
+PRIORITY = 8
+#: Rows (of largest ``m``) whose "max lam" LPs are screened by a few dual simplex pivots
+#: (problems of at least :data:`SCREEN_MIN_N` nodes; smaller ones solve the
+#: :data:`UNSCREENED_LPS` rows of largest slack at the ``lam2`` optimum exactly, as before).
+SCREEN_ROWS = 400
+SCREEN_MIN_N = 300
+UNSCREENED_LPS = 16
+#: Screening rounds (successive halving): ``(rows, pivots)``: the best ``rows`` of the
+#: previous round (the first: :data:`SCREEN_ROWS`) get ``pivots`` dual simplex pivots each.
+SCREEN_ROUNDS = ((None, 10), (48, 40), (12, 160))
+#: At most this many LPs of at least :data:`SINGLE_MIN_N` unknowns are solved one by one with
+#: an explicit basis inverse instead of the batched dual simplex.  One: the pool amortises its
+#: pricing over several LPs (N = 2000, seed 2: 8 capped LPs of ~4000 pivots took 327 s one by
+#: one against 122 s pooled at 8176575), a lone long LP is faster alone (14 s against 18 s).
+SINGLE_MAX = 1
+SINGLE_MIN_N = 200
 #: Pivots a walk may spend on one target before it goes to an exact LP.
 WALK_CAP = 60
 #: Pivots a walk may go on with when the first ``WALK_CAP`` did not decide.
@@ -98,10 +124,51 @@ class _Pruner:
             if not self.take(rows[g], ans):
                 failed.append(rows[g])
 
-        dense_lp.batch_dual_simplex(self.tab, [(k,) for k in rows], on_answer=on_answer,
-                                    skip=lambda g: self.exact[rows[g]])
+        _solve(self.tab, rows, on_answer, skip=lambda g: self.exact[rows[g]])
         for k in failed:
             self.hi[k], self.exact[k] = min(value(self.book.highs("max", (k,))), self.lam2), True
+
+    def screen(self, order):
+        """The candidates of ``order`` re-ranked by upper bounds of their ``lam_high``.
+
+        A dual simplex "max lam with row ``k`` tight" stopped after a few pivots sits at a
+        dual-feasible basis: its ``lam`` bounds ``lam_high_k`` from above and falls towards it
+        with every pivot.  The first ``max(SCREEN_ROWS, R / 10)`` rows of ``order`` get a few
+        pivots each, the best of them more and so on (:data:`SCREEN_ROUNDS`); the order of
+        the last bounds ranks the candidates (only a heuristic: nothing is concluded from a
+        bound).  An LP that finishes within its pivots is an exact answer and is recorded as
+        such.  On the Kachanov networks this puts the row of ``lam1`` first (N = 2000: rank 10
+        of 400 after 10 pivots, 2 of 48 after 40 more, 0 of 12 after 160 more; N = 1000:
+        rank 3 after 10 pivots), where the order of ``m`` alone has it at rank 176 / 131.
+        """
+        rows = [int(k) for k in order[:max(SCREEN_ROWS, self.R // 10, INIT_LPS)]]
+        if not SCREEN_ROWS or len(rows) <= INIT_LPS:
+            return order
+        for keep, piv in SCREEN_ROUNDS:
+            rows = rows if keep is None else rows[:max(keep, INIT_LPS + PRIORITY)]
+            ub = np.full(len(rows), np.inf)
+
+            def on_answer(g, ans, rows=rows, ub=ub):
+                k = rows[g]
+                if ans.status == "optimal":
+                    self.take(k, ans)
+                elif ans.status == "failed" and ans.x is not None:
+                    self.book.iters += ans.iterations  # pivots counted, not a solved LP
+                    ub[g] = float(ans.x[-1])  # a dual-feasible basis: an upper bound
+                if self.exact[k]:
+                    ub[g] = np.inf  # known exactly (and an incumbent if smallest): done
+
+            dense_lp.batch_dual_simplex(self.tab, [(k,) for k in rows], max_pivots=piv,
+                                        on_answer=on_answer,
+                                        skip=lambda g, rows=rows: self.exact[rows[g]])
+            rows = [rows[g] for g in np.argsort(ub, kind="stable")]
+        rows = rows[:INIT_LPS + PRIORITY]
+        rest = set(rows)
+        return rows + [k for k in order if k not in rest]
+
+    def slack0(self):
+        """Slacks of the (unit-norm) rows at the ``lam2`` optimum."""
+        return self.tab.b[: self.R] - self.tab.A[: self.R] @ self.best[2].x
 
     # ---------------------------------------------------------------- walk
     def open(self, todo):
@@ -128,16 +195,20 @@ class _Pruner:
             if not self.take(rows[g], ans, cap=t):
                 failed.append(rows[g])
 
-        dense_lp.batch_dual_simplex(tab, [(k,) for k in rows], max_pivots=2 * self.n + 50,
-                                    on_answer=on_answer,
-                                    skip=lambda g: self.lower[rows[g]] >= t)
+        _solve(tab, rows, on_answer, skip=lambda g: self.lower[rows[g]] >= t,
+               max_pivots=2 * self.n + 50)
         return failed
 
     def run(self):
-        R = self.R
-        slack = self.tab.b[:R] - self.tab.A[:R] @ self.best[2].x
-        order = [k for k in np.argsort(-slack, kind="stable") if not self.exact[k]]
-        self.exact_lps(order[:INIT_LPS])
+        if SCREEN_ROWS and self.n >= SCREEN_MIN_N:
+            order = [k for k in np.lexsort((-self.slack0(), -self.m)) if not self.exact[k]]
+            order = self.screen(order)
+            self.exact_lps(order[:INIT_LPS])
+            priority = order[INIT_LPS:INIT_LPS + PRIORITY]
+        else:  # small problems: short LPs, the screen costs more than it saves
+            order = [k for k in np.argsort(-self.slack0(), kind="stable") if not self.exact[k]]
+            self.exact_lps(order[:UNSCREENED_LPS])
+            priority = []
         walk, t = None, np.inf
         while True:
             if walk is None or self.best[0] < t:
@@ -159,7 +230,8 @@ class _Pruner:
                 todo[pending] = False
                 left = np.flatnonzero(todo)
                 if left.size and len(pending) < BATCH:
-                    k = int(left[np.argmin(walk.s[left])])
+                    first = [j for j in priority if todo[j]]
+                    k = first[0] if first else int(left[np.argmin(walk.s[left])])
                     res = walk.walk_to(k, WALK_CAP)
                     if res is None and not walk.broken:  # undecided: go on to a decision
                         res = walk.walk_to(k, LONG_WALK_CAP)
@@ -188,6 +260,19 @@ class _Pruner:
             self.exact_lps(self.capped_lps(walk, t, pending))
             if self.best[0] < t:
                 walk = None
+
+
+def _solve(tab, rows, on_answer, skip, max_pivots=None):
+    """"max lam" with row ``k`` tight for each ``k`` of ``rows`` from ``tab``'s basis: a few
+    LPs on a large problem (long paths, issue 14) one by one with an explicit basis inverse
+    (:func:`~.dual_simplex.single_dual_simplex`), else the batched dual simplex."""
+    if len(rows) <= SINGLE_MAX and tab.n >= SINGLE_MIN_N:
+        for g, k in enumerate(rows):
+            if not skip(g):
+                on_answer(g, single_dual_simplex(tab, (k,), max_pivots=max_pivots))
+        return
+    dense_lp.batch_dual_simplex(tab, [(k,) for k in rows], max_pivots=max_pivots,
+                                on_answer=on_answer, skip=skip)
 
 
 def lam_high_pruned(cs, A, b, tab, main, book):

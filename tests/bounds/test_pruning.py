@@ -23,11 +23,16 @@ from shakedown.bounds.facet_walk import FacetWalk, certified_rows
 SAME = 1e-9
 
 
-@pytest.fixture(params=[32, 1], ids=["init32", "init1"])
+@pytest.fixture(params=[(32, 400), (1, 400), (1, 0)], ids=["init32", "init1", "init1-noscreen"])
 def init_lps(request, monkeypatch):
-    """Run each test with the default start and with a single start LP (pruning does the rest)."""
-    monkeypatch.setattr(pruning, "INIT_LPS", request.param)
-    return request.param
+    """Run each test with many start LPs, with a single one (pruning does the rest), and with a
+    single one chosen without the screening by partial dual simplex runs (the start is then
+    far from ``lam1`` and the walks, descents and capped LPs do most of the work)."""
+    monkeypatch.setattr(pruning, "INIT_LPS", request.param[0])
+    monkeypatch.setattr(pruning, "UNSCREENED_LPS", request.param[0])
+    monkeypatch.setattr(pruning, "SCREEN_ROWS", request.param[1])
+    monkeypatch.setattr(pruning, "SCREEN_MIN_N", 0)  # screen small problems too
+    return request.param[0]
 
 
 def assert_fast_matches_full(system, load):
@@ -206,6 +211,8 @@ def test_breaking_the_certificate_check_is_caught(monkeypatch):
     differ from the exact one on a network where pruning matters: the tests above would catch a
     wrong certificate."""
     monkeypatch.setattr(pruning, "INIT_LPS", 1)
+    monkeypatch.setattr(pruning, "UNSCREENED_LPS", 1)
+    monkeypatch.setattr(pruning, "SCREEN_ROWS", 0)
     cracks = cn.sample_crack_set(120, density=0.1, half_length=1.0, min_spacing=0.1,
                                  rng=np.random.default_rng(2))
     model = cn.kachanov_model(cracks, shear_modulus=1.0, poisson_ratio=0.25, friction=0.6)
@@ -223,6 +230,8 @@ def test_every_descent_lands_on_the_exact_lam_high(monkeypatch):
     """The parametric descents (face empty at the incumbent: follow lam down) end exactly at
     the row's lam_high of the full computation; a perturbed dual certificate is rejected."""
     monkeypatch.setattr(pruning, "INIT_LPS", 1)
+    monkeypatch.setattr(pruning, "UNSCREENED_LPS", 1)
+    monkeypatch.setattr(pruning, "SCREEN_ROWS", 0)
     cracks = cn.sample_crack_set(120, density=0.1, half_length=1.0, min_spacing=0.1,
                                  rng=np.random.default_rng(2))
     model = cn.kachanov_model(cracks, shear_modulus=1.0, poisson_ratio=0.25, friction=0.6)
@@ -253,3 +262,34 @@ def test_every_descent_lands_on_the_exact_lam_high(monkeypatch):
         assert lam * scale == pytest.approx(full.lam_high[k], rel=1e-9)
     assert fast.lam1 == pytest.approx(full.lam1, rel=SAME)
 
+
+
+@pytest.mark.parametrize("seed,n,dup", [(0, 40, False), (1, 60, False), (2, 40, True)])
+def test_walk_maximise_matches_linprog(seed, n, dup):
+    """The walk's primal simplex (multipliers updated with the basis, refreshed every 32
+    pivots and before an optimum is declared) ends at the optimum HiGHS finds, also with every
+    row duplicated (ties in every ratio test), on walks longer than the refresh period."""
+    from scipy.optimize import linprog
+
+    G, b, x, T = _polytope(seed, n)
+    R = len(b)
+    if dup:
+        G, b = np.vstack([G, G]), np.r_[b, b]
+    rng = np.random.default_rng(seed)
+    long_walks = 0
+    for _ in range(4):
+        g = rng.standard_normal(n)
+        # start at the opposite vertex (the minimum of g): long walks
+        low = linprog(g, A_ub=G[:R], b_ub=b[:R], bounds=(None, None), method="highs-ds").x
+        T = np.flatnonzero(np.abs(b[:R] - G[:R] @ low) <= 1e-9 * (1 + np.abs(b[:R])))[:n]
+        w = FacetWalk(G, b, T)
+        assert w.ok
+        assert w.maximise(g, 2000)
+        long_walks += w.pivots > 32
+        ref = linprog(-g, A_ub=G, b_ub=b, bounds=(None, None), method="highs")
+        assert g @ w.x == pytest.approx(-ref.fun, rel=1e-9, abs=1e-9)
+        tight = certified_rows(G, b, w.x)
+        assert tight is not None and tight[w.T].all()
+        y = np.linalg.solve(G[w.T].T, g)  # fresh multipliers: dual feasible at the end
+        assert y.min() >= -1e-9 * np.abs(y).max()
+    assert long_walks
