@@ -102,8 +102,9 @@ def solve_highs(cs: ConstraintSet, has_periodic_part: bool, intervals, adjacency
     """Every LP by HiGHS (the reference path); ``cs`` nondimensional.
 
     On a dense constraint set (the reference path) every interval is computed exactly.  On a
-    sparse one, ``intervals="lam1"`` computes the intervals ``lam1`` needs, by covering LPs and
-    incumbent pruning (:mod:`.highs_pruning`); ``"all"`` / ``True``: every interval exactly."""
+    sparse one, ``intervals="lam1"`` computes the intervals ``lam1`` needs (family points,
+    capped LPs sharing their tight rows, incumbent pruning: :mod:`.highs_pruning`); ``"all"`` /
+    ``True``: every interval exactly."""
     n = cs.n_nodes
     eng = HighsModel(cs)
     scale_m = np.abs(cs.m).max(initial=0.0)

@@ -31,12 +31,12 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
 from .outcome import value
 
 #: Relative slack below which a row counts as tight at a certified vertex.
 TIGHT_RTOL = 1e-9
-
 
 
 def row_max(G) -> np.ndarray:
@@ -60,8 +60,6 @@ def family_vertices(cs, lam, undecided):
     test as an LP vertex's) all ``N`` rows of the family are marked decided.  At ``lam = 0``
     under a compressive static load the all-``I`` point is in ``H(0)`` exactly when every
     normal reaction there stays compressive, so this usually settles every ``lam_low``."""
-    import scipy.sparse.linalg as spla
-
     n = cs.n_nodes
     b = cs.c + lam * cs.m
     for rows in (np.arange(n), np.arange(n, 2 * n)):
