@@ -81,3 +81,45 @@ def executed_notebooks(tmp_path_factory):
 
     get.folder = folder
     return get
+
+
+def _banded_system(n, seed=0, coupling=0.3, bands=(1, 2, 5), friction=0.3):
+    """A sparse-structured SPD system (a few neighbours per node, diagonally dominant), dense."""
+    import numpy as np
+
+    import shakedown as sd
+
+    rng = np.random.default_rng(seed)
+    K = np.zeros((2 * n, 2 * n))
+    for d in bands:
+        v = rng.uniform(-1, 1, 2 * n - d) * 0.3
+        K += np.diag(v, d) + np.diag(v, -d)
+    K[:n, n:] *= coupling / 0.3
+    K[n:, :n] *= coupling / 0.3
+    K += np.diag(np.abs(K).sum(axis=1) + rng.uniform(0.5, 1.5, 2 * n))
+    return sd.DiscreteSystem(K[:n, :n], K[:n, n:], K[n:, n:], friction=friction)
+
+
+@pytest.fixture
+def banded_system():
+    """Factory ``banded_system(n, seed=0, coupling=0.3, bands=(1, 2, 5), friction=0.3)``: a dense
+    SPD system whose ``K`` has a few bands (its ``to_sparse()`` twin is genuinely sparse)."""
+    return _banded_system
+
+
+@pytest.fixture
+def harmonic_load():
+    """Factory ``harmonic_load(rng, system, amp=2.0, p_mean=1.0, p_amp=0.3)``: a random
+    one-harmonic load (tangential amplitude ``amp`` times the friction, mean normal ``p_mean``,
+    normal amplitude ``p_amp``)."""
+    def make(rng, s, amp=2.0, p_mean=1.0, p_amp=0.3):
+        import numpy as np
+
+        import shakedown as sd
+
+        n = s.n_nodes
+        f = float(s.friction.max())
+        return sd.LoadCycle.from_harmonics(0.1 * rng.normal(size=n), np.full(n, p_mean),
+                                           q_cos=amp * f * rng.normal(size=n),
+                                           p_sin=p_amp * rng.normal(size=n))
+    return make

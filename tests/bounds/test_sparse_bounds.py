@@ -82,15 +82,9 @@ def test_tight_rows_rejects_a_point_off_the_face():
 def test_sparse_lam1_zero_cases_take_the_exact_path(seed, never):
     """A facet redundant from lam = 0 on (never active) or first touched above 0: lam1 = 0,
     every interval exact, as on the dense path (the systems of tests/bounds/test_pruning.py)."""
-    rng = np.random.default_rng(seed)
-    n = 3
-    M = rng.standard_normal((2 * n, 2 * n))
-    K = M @ M.T + 0.3 * np.eye(2 * n)
-    d = sd.DiscreteSystem(K[:n, :n], K[:n, n:], K[n:, n:], 0.8)
-    p0 = 1 + rng.random(n)
-    q0 = 0.64 * p0 * rng.uniform(-1, 1, n)
-    load = sd.LoadCycle.from_harmonics(q0, p0, q_cos=rng.standard_normal(n),
-                                       p_cos=0.5 * rng.standard_normal(n))
+    from test_pruning import _biased  # the same systems as the dense path's test
+
+    d, load = _biased(seed)
     b = sd.shakedown_bounds(d.to_sparse(), load)
     e = sd.shakedown_bounds(d, load, solver="highs", intervals=True)
     assert b.lam1 == 0.0 and b.lam2 == pytest.approx(e.lam2, rel=1e-7) and b.lam2 > 0

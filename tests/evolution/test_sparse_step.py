@@ -9,25 +9,10 @@ import shakedown as sd
 from shakedown.evolution.complementarity import FEAS_TOL, StepSolver
 
 
-def banded(n, seed=0, coupling=0.3):
-    rng = np.random.default_rng(seed)
-    K = np.zeros((2 * n, 2 * n))
-    for d in (1, 2, 7):
-        v = rng.uniform(-1, 1, 2 * n - d) * 0.3
-        K += np.diag(v, d) + np.diag(v, -d)
-    K[:n, n:] *= coupling / 0.3
-    K[n:, :n] *= coupling / 0.3
-    K += np.diag(np.abs(K).sum(axis=1) + rng.uniform(0.5, 1.5, 2 * n))
-    s = sd.DiscreteSystem(K[:n, :n], K[:n, n:], K[n:, n:], friction=1.0)
+def banded(make, n, seed=0, coupling=0.3):
+    """A banded SPD system (conftest ``banded_system``), friction half its sufficient bound."""
+    s = make(n, seed, coupling, bands=(1, 2, 7), friction=1.0)
     return s.with_friction(0.5 * min(s.critical_friction().value, 2.0))
-
-
-def load_of(rng, s, amp=2.0, p_mean=1.0, p_amp=0.3):
-    n = s.n_nodes
-    f = float(s.friction.max())
-    return sd.LoadCycle.from_harmonics(0.1 * rng.normal(size=n), np.full(n, p_mean),
-                                       q_cos=amp * f * rng.normal(size=n),
-                                       p_sin=p_amp * rng.normal(size=n))
 
 
 def assert_same_run(a, b, s):
@@ -45,11 +30,11 @@ def assert_same_run(a, b, s):
 
 @pytest.mark.parametrize("seed", range(4))
 @pytest.mark.parametrize("lam", [0.4, 1.5])
-def test_sparse_runs_equal_dense_runs(seed, lam):
+def test_sparse_runs_equal_dense_runs(seed, lam, banded_system, harmonic_load):
     """Shakedown to cyclic slip, with separation for seeds 2-3 (normal load dips below 0)."""
     rng = np.random.default_rng(seed)
-    d = banded(30, seed)
-    load = load_of(rng, d, p_mean=1.0 if seed < 2 else 0.2, p_amp=0.3 if seed < 2 else 0.6)
+    d = banded(banded_system, 30, seed)
+    load = harmonic_load(rng, d, p_mean=1.0 if seed < 2 else 0.2, p_amp=0.3 if seed < 2 else 0.6)
     s = d.to_sparse()
     a = sd.solve_cycles(s, load, lam, steps_per_cycle=24, max_cycles=40)
     b = sd.solve_cycles(d, load, lam, steps_per_cycle=24, max_cycles=40)
@@ -60,13 +45,13 @@ def test_sparse_runs_equal_dense_runs(seed, lam):
         assert ea.closed_integral == pytest.approx(eb.closed_integral, rel=1e-9, abs=1e-12)
 
 
-def test_sparse_solver_never_densifies_and_uses_superlu(monkeypatch):
+def test_sparse_solver_never_densifies_and_uses_superlu(monkeypatch, banded_system, harmonic_load):
     """The step's factors are SuperLU objects; K stays sparse (toarray is never called on it
     outside the Lemke fallback)."""
     rng = np.random.default_rng(7)
-    d = banded(60, 7)
+    d = banded(banded_system, 60, 7)
     s = d.to_sparse()
-    load = load_of(rng, d, amp=3.0)
+    load = harmonic_load(rng, d, amp=3.0)
     solver = StepSolver(s)
     assert solver.sparse and not solver.kernel
     calls = []
@@ -85,12 +70,12 @@ def test_sparse_solver_never_densifies_and_uses_superlu(monkeypatch):
     assert type(F.lu).__name__ == "SuperLU"
 
 
-def test_sparse_many_nodes_change_state_at_once():
+def test_sparse_many_nodes_change_state_at_once(banded_system, harmonic_load):
     """A load jump from zero to beyond gross slip: every node slips in the first step; the
     SuperLU factorizations agree with the dense LU and its Woodbury updates."""
     rng = np.random.default_rng(3)
-    d = banded(300, 3)
-    load = load_of(rng, d, amp=6.0)
+    d = banded(banded_system, 300, 3)
+    load = harmonic_load(rng, d, amp=6.0)
     s = d.to_sparse()
     opts = dict(update_min_size=8, max_update_rank=64)
     a = sd.solve_cycles(s, load, 1.0, steps_per_cycle=8, max_cycles=6,
@@ -100,11 +85,11 @@ def test_sparse_many_nodes_change_state_at_once():
     assert_same_run(a, b, d)
 
 
-def test_sparse_multistate_and_events_equal_dense():
+def test_sparse_multistate_and_events_equal_dense(banded_system, harmonic_load):
     rng = np.random.default_rng(5)
-    d = banded(20, 5)
+    d = banded(banded_system, 20, 5)
     s = d.to_sparse()
-    load = load_of(rng, d)
+    load = harmonic_load(rng, d)
     V0 = 0.2 * rng.normal(size=(4, 20)) / d.A.diagonal().min()
     ra = sd.solve_cycles(s, load, 1.0, initial_slip=V0, steps_per_cycle=16, max_cycles=30)
     rb = sd.solve_cycles(d, load, 1.0, initial_slip=V0, steps_per_cycle=16, max_cycles=30)
@@ -116,11 +101,11 @@ def test_sparse_multistate_and_events_equal_dense():
 
 
 @pytest.mark.parametrize("force, length", [(1e6, 1.0), (1.0, 1e-4)])
-def test_sparse_run_units(force, length):
+def test_sparse_run_units(force, length, banded_system, harmonic_load):
     """Forces x F, lengths x L: K x F / L, slips x L, dissipation x F L."""
     rng = np.random.default_rng(11)
-    d = banded(25, 11)
-    load = load_of(rng, d)
+    d = banded(banded_system, 25, 11)
+    load = harmonic_load(rng, d)
     k = force / length
     s2 = sd.DiscreteSystem(sp.csr_matrix(d.A * k), sp.csr_matrix(d.B * k),
                            sp.csr_matrix(d.C * k), d.friction)
@@ -136,13 +121,13 @@ def test_sparse_run_units(force, length):
                                atol=1e-9 * length * abs(a.final_slip).max())
 
 
-def test_wrong_sparse_factor_is_caught(monkeypatch):
+def test_wrong_sparse_factor_is_caught(monkeypatch, banded_system, harmonic_load):
     """A SuperLU solve 1e-3 off: the answer fails its own checks (the run stops with a
     message, or the step is re-solved), never a silently wrong dissipation."""
     rng = np.random.default_rng(2)
-    d = banded(30, 2)
+    d = banded(banded_system, 30, 2)
     s = d.to_sparse()
-    load = load_of(rng, d, amp=3.0)
+    load = harmonic_load(rng, d, amp=3.0)
     good = sd.solve_cycles(s, load, 1.5, steps_per_cycle=16, max_cycles=20)
     solver = StepSolver(s)
     real = solver._factor_sparse
@@ -167,12 +152,12 @@ def test_wrong_sparse_factor_is_caught(monkeypatch):
     assert bad.status == "step_failed", "a 1e-3 error in every solve must not pass the checks"
 
 
-def test_sparse_steady_cycle_and_plot_inputs_equal_dense():
+def test_sparse_steady_cycle_and_plot_inputs_equal_dense(banded_system, harmonic_load):
     """The steady-cycle solver (Anderson on the period map) and the two-node plot helpers take a
     sparse system like its dense twin."""
     rng = np.random.default_rng(4)
-    d = banded(15, 4)
-    load = load_of(rng, d, amp=3.0)
+    d = banded(banded_system, 15, 4)
+    load = harmonic_load(rng, d, amp=3.0)
     a = sd.steady_cycle(d.to_sparse(), load, 1.5, steps_per_cycle=16)
     b = sd.steady_cycle(d, load, 1.5, steps_per_cycle=16)
     assert a.status == b.status == "converged"

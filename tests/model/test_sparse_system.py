@@ -9,21 +9,8 @@ import shakedown as sd
 from shakedown.model.errors import InputError, NotPositiveDefiniteError, NotSymmetricError, ShapeError
 
 
-def banded(n, seed=0, coupling=0.3):
-    """A sparse SPD K (2N x 2N, a few neighbours per node), as its dense twin and blocks."""
-    rng = np.random.default_rng(seed)
-    K = np.zeros((2 * n, 2 * n))
-    for d in (1, 2, 5):
-        v = rng.uniform(-1, 1, 2 * n - d) * 0.3
-        K += np.diag(v, d) + np.diag(v, -d)
-    K[:n, n:] *= coupling / 0.3
-    K[n:, :n] *= coupling / 0.3
-    K += np.diag(np.abs(K).sum(axis=1) + rng.uniform(0.5, 1.5, 2 * n))  # diagonally dominant
-    return sd.DiscreteSystem(K[:n, :n], K[:n, n:], K[n:, n:], friction=0.3)
-
-
-def test_sparse_twin_has_the_same_matrices_and_checks():
-    d = banded(40)
+def test_sparse_twin_has_the_same_matrices_and_checks(banded_system):
+    d = banded_system(40)
     s = d.to_sparse()
     assert s.is_sparse and not d.is_sparse
     assert sp.issparse(s.K) and sp.issparse(s.A) and sp.issparse(s.B)
@@ -44,24 +31,24 @@ def test_sparse_twin_has_the_same_matrices_and_checks():
     assert "sparse" in repr(s)
 
 
-def test_small_sparse_system_enumerates_like_the_dense_one():
-    d = banded(3, seed=4, coupling=0.8)
+def test_small_sparse_system_enumerates_like_the_dense_one(banded_system):
+    d = banded_system(3, seed=4, coupling=0.8)
     s = d.to_sparse()
     assert s.critical_friction().method == d.critical_friction().method == "enumeration"
     assert s.critical_friction().factor == pytest.approx(d.critical_friction().factor, rel=1e-12)
 
 
 @pytest.mark.parametrize("unit", [1e-6, 1e9])
-def test_sparse_checks_do_not_depend_on_units(unit):
-    d = banded(30, seed=2)
+def test_sparse_checks_do_not_depend_on_units(unit, banded_system):
+    d = banded_system(30, seed=2)
     s = sd.DiscreteSystem(sp.csr_matrix(d.A * unit), sp.csr_matrix(d.B * unit),
                           sp.csr_matrix(d.C * unit), 0.3)
     assert s.condition_number == pytest.approx(d.condition_number, rel=1e-8)
     assert s.critical_friction().factor == pytest.approx(d.critical_friction().factor, rel=1e-8)
 
 
-def test_bad_sparse_input_is_named():
-    d = banded(10)
+def test_bad_sparse_input_is_named(banded_system):
+    d = banded_system(10)
     A, B, C = (sp.csr_matrix(M) for M in (d.A, d.B, d.C))
     bad = A.tolil()
     bad[2, 5] = 7.0
@@ -79,8 +66,8 @@ def test_bad_sparse_input_is_named():
         sd.DiscreteSystem(sp.csr_matrix(np.ones((3, 4))), B, C, 0.3)
 
 
-def test_indefinite_and_singular_sparse_K_are_refused():
-    d = banded(10)
+def test_indefinite_and_singular_sparse_K_are_refused(banded_system):
+    d = banded_system(10)
     A, B, C = (sp.csr_matrix(M) for M in (d.A, d.B, d.C))
     neg = A.tolil()
     neg[3, 3] = -1.0  # one negative pivot
@@ -97,18 +84,18 @@ def test_indefinite_and_singular_sparse_K_are_refused():
                           Kw[10:, 10:].toarray(), 0.3)
 
 
-def test_mixed_dense_and_sparse_blocks_give_a_sparse_system():
-    d = banded(8)
+def test_mixed_dense_and_sparse_blocks_give_a_sparse_system(banded_system):
+    d = banded_system(8)
     s = sd.DiscreteSystem(sp.csr_matrix(d.A), d.B, d.C, d.friction)
     assert s.is_sparse
     np.testing.assert_array_equal(s.K.toarray(), d.K)
 
 
-def test_sparse_system_pickles():
+def test_sparse_system_pickles(banded_system):
     """Studies send systems to worker processes: a sparse system survives pickling."""
     import pickle
 
-    s = banded(12).to_sparse()
+    s = banded_system(12).to_sparse()
     t = pickle.loads(pickle.dumps(s))
     assert t.is_sparse
     np.testing.assert_array_equal(t.K.toarray(), s.K.toarray())
