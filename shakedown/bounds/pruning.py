@@ -195,8 +195,10 @@ class _Pruner:
             if not self.take(rows[g], ans, cap=t):
                 failed.append(rows[g])
 
+        # a value below t ends the batch: the rows still running are decided again at the
+        # new, lower incumbent (most of them by the walk there), not by long LPs at t
         _solve(tab, rows, on_answer, skip=lambda g: self.lower[rows[g]] >= t,
-               max_pivots=2 * self.n + 50)
+               max_pivots=2 * self.n + 50, stop=lambda: self.best[0] < t)
         return failed
 
     def run(self):
@@ -257,12 +259,14 @@ class _Pruner:
             if walk is None:  # reopen at the incumbent's optimum, then decide the rest
                 self.exact_lps(pending)
                 continue
-            self.exact_lps(self.capped_lps(walk, t, pending))
-            if self.best[0] < t:
+            failed = self.capped_lps(walk, t, pending)
+            if self.best[0] < t:  # lower incumbent: the failed rows are decided at it
                 walk = None
+            else:
+                self.exact_lps(failed)
 
 
-def _solve(tab, rows, on_answer, skip, max_pivots=None):
+def _solve(tab, rows, on_answer, skip, max_pivots=None, stop=None):
     """"max lam" with row ``k`` tight for each ``k`` of ``rows`` from ``tab``'s basis: a few
     LPs on a large problem (long paths, issue 14) one by one with an explicit basis inverse
     (:func:`~.dual_simplex.single_dual_simplex`), else the batched dual simplex."""
@@ -272,7 +276,7 @@ def _solve(tab, rows, on_answer, skip, max_pivots=None):
                 on_answer(g, single_dual_simplex(tab, (k,), max_pivots=max_pivots))
         return
     dense_lp.batch_dual_simplex(tab, [(k,) for k in rows], max_pivots=max_pivots,
-                                on_answer=on_answer, skip=skip)
+                                on_answer=on_answer, skip=skip, stop=stop)
 
 
 def lam_high_pruned(cs, A, b, tab, main, book):
