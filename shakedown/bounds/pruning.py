@@ -25,7 +25,9 @@ driver :func:`lam_high_pruned`:
    the walk's vertex plus the row ``lam <= t``: dual feasible there), in batches of
    :data:`BATCH`: a value below ``t`` is that row's exact ``lam_high`` (the cap is not binding)
    and lowers the incumbent (the walk restarts from that optimum's vertex); a binding cap proves
-   ``lam_high >= t``.  An LP that fails is solved from the ``lam2`` basis, then by HiGHS.
+   ``lam_high >= t``.  The first value below ``t`` ends the batch: the rows still running are
+   decided again at the new incumbent (seed 2, N = 1000: two of them stall at ``lam = t``).
+   An LP that fails while ``t`` stands is solved from the ``lam2`` basis, then by HiGHS.
 
 Every optimum of step 1 and 3 also proves ``lam_high_j >= value`` for each row ``j`` tight at
 it (checked by :func:`~.facet_walk.certified_rows`).  Result: per row either the exact
