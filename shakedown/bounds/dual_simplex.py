@@ -80,7 +80,7 @@ class Tableau:
 
 
 def batch_dual_simplex(tab: Tableau, equal_rows, *, max_pivots=None, width=None, chunk=None,
-                       on_answer=None, skip=None):
+                       on_answer=None, skip=None, stop=None):
     """Solve ``max e.x s.t. A x <= b`` plus, for LP ``l``, ``A_k x = b_k`` for ``k`` in
     ``equal_rows[l]``, all from the basis ``tab.T0``, in lock-step.
 
@@ -88,6 +88,8 @@ def batch_dual_simplex(tab: Tableau, equal_rows, *, max_pivots=None, width=None,
     in order, so rounds stay full whatever the spread of pivot counts).  ``on_answer(l, answer)``
     is called as each LP finishes; ``skip(l)`` is asked before LP ``l`` is started (``True``:
     not solved, its entry is ``None``), so a caller can share answers between LPs.
+    ``stop()`` is asked before each pivot round: ``True`` ends the run, the LPs still running
+    are reported ``"failed"`` and those not started are skipped (``None``).
 
     Returns a list of :class:`~.certificates.DenseAnswer` (multipliers in the caller's row
     units), in the order of ``equal_rows``; with ``on_answer`` the answers are only streamed
@@ -101,7 +103,7 @@ def batch_dual_simplex(tab: Tableau, equal_rows, *, max_pivots=None, width=None,
     if width is None:
         # working storage per LP: H (k x n, k up to ~100 typically), act/masks (R), S^-1
         width = int(max(8, min(256, CHUNK_BYTES / (8 * (100 * n + 6 * R + 100 * 100)))))
-    return _batch(tab, list(equal_rows), max_pivots, int(width), on_answer, skip)
+    return _batch(tab, list(equal_rows), max_pivots, int(width), on_answer, skip, stop)
 
 
 class _State:
@@ -190,7 +192,7 @@ class _State:
                   np.arange(ku)[None, None, :]] = np.linalg.inv(Hp + np.eye(ku)[None])
 
 
-def _batch(tab, eqs, max_pivots, width, on_answer, skip):  # noqa: C901  (one pivot loop)
+def _batch(tab, eqs, max_pivots, width, on_answer, skip, stop=None):  # noqa: C901
     n = tab.n
     A, b, W = tab.A, tab.b, tab.W
     tolx = FEAS_TOL * tab.scale_x
@@ -250,6 +252,9 @@ def _batch(tab, eqs, max_pivots, width, on_answer, skip):  # noqa: C901  (one pi
 
     while True:
         retire(st.piv >= max_pivots, "failed")
+        if stop is not None and stop():
+            retire(np.ones(st.ids.size, bool), "failed")
+            break
         if 4 * st.ids.size <= 3 * width:
             refill()
         l = st.ids.size

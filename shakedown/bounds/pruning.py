@@ -25,7 +25,9 @@ driver :func:`lam_high_pruned`:
    the walk's vertex plus the row ``lam <= t``: dual feasible there), in batches of
    :data:`BATCH`: a value below ``t`` is that row's exact ``lam_high`` (the cap is not binding)
    and lowers the incumbent (the walk restarts from that optimum's vertex); a binding cap proves
-   ``lam_high >= t``.  An LP that fails is solved from the ``lam2`` basis, then by HiGHS.
+   ``lam_high >= t``.  The first value below ``t`` ends the batch: the rows still running are
+   decided again at the new incumbent (seed 2, N = 1000: two of them stall at ``lam = t``).
+   An LP that fails while ``t`` stands is solved from the ``lam2`` basis, then by HiGHS.
 
 Every optimum of step 1 and 3 also proves ``lam_high_j >= value`` for each row ``j`` tight at
 it (checked by :func:`~.facet_walk.certified_rows`).  Result: per row either the exact
@@ -195,8 +197,10 @@ class _Pruner:
             if not self.take(rows[g], ans, cap=t):
                 failed.append(rows[g])
 
+        # a value below t ends the batch: the rows still running are decided again at the
+        # new, lower incumbent (most of them by the walk there), not by long LPs at t
         _solve(tab, rows, on_answer, skip=lambda g: self.lower[rows[g]] >= t,
-               max_pivots=2 * self.n + 50)
+               max_pivots=2 * self.n + 50, stop=lambda: self.best[0] < t)
         return failed
 
     def run(self):
@@ -257,12 +261,14 @@ class _Pruner:
             if walk is None:  # reopen at the incumbent's optimum, then decide the rest
                 self.exact_lps(pending)
                 continue
-            self.exact_lps(self.capped_lps(walk, t, pending))
-            if self.best[0] < t:
+            failed = self.capped_lps(walk, t, pending)
+            if self.best[0] < t:  # lower incumbent: the failed rows are decided at it
                 walk = None
+            else:
+                self.exact_lps(failed)
 
 
-def _solve(tab, rows, on_answer, skip, max_pivots=None):
+def _solve(tab, rows, on_answer, skip, max_pivots=None, stop=None):
     """"max lam" with row ``k`` tight for each ``k`` of ``rows`` from ``tab``'s basis: a few
     LPs on a large problem (long paths, issue 14) one by one with an explicit basis inverse
     (:func:`~.dual_simplex.single_dual_simplex`), else the batched dual simplex."""
@@ -272,7 +278,7 @@ def _solve(tab, rows, on_answer, skip, max_pivots=None):
                 on_answer(g, single_dual_simplex(tab, (k,), max_pivots=max_pivots))
         return
     dense_lp.batch_dual_simplex(tab, [(k,) for k in rows], max_pivots=max_pivots,
-                                on_answer=on_answer, skip=skip)
+                                on_answer=on_answer, skip=skip, stop=stop)
 
 
 def lam_high_pruned(cs, A, b, tab, main, book):

@@ -293,3 +293,33 @@ def test_walk_maximise_matches_linprog(seed, n, dup):
         y = np.linalg.solve(G[w.T].T, g)  # fresh multipliers: dual feasible at the end
         assert y.min() >= -1e-9 * np.abs(y).max()
     assert long_walks
+
+
+@pytest.mark.parametrize("n,seed", [(120, 2), (200, 3)])
+def test_capped_batches_stopped_by_a_lower_incumbent(n, seed, monkeypatch):
+    """Short walks (most rows go to capped LPs) from an unscreened start: a capped LP that
+    lowers the incumbent ends its batch, and the rows still running are decided again at the
+    new incumbent (not by exact LPs at the old one).  lam1 and every exact lam_high stay those
+    of the full computation."""
+    monkeypatch.setattr(pruning, "INIT_LPS", 1)
+    monkeypatch.setattr(pruning, "UNSCREENED_LPS", 1)
+    monkeypatch.setattr(pruning, "SCREEN_ROWS", 0)
+    monkeypatch.setattr(pruning, "WALK_CAP", 2)
+    monkeypatch.setattr(pruning, "LONG_WALK_CAP", 2)
+    stopped = []
+    orig = pruning._Pruner.capped_lps
+
+    def capped_lps(self, walk, t, rows):
+        failed = orig(self, walk, t, rows)
+        if failed and self.best[0] < t:
+            stopped.append(len(failed))
+        return failed
+
+    monkeypatch.setattr(pruning._Pruner, "capped_lps", capped_lps)
+    cracks = cn.sample_crack_set(n, density=0.1, half_length=1.0, min_spacing=0.1,
+                                 rng=np.random.default_rng(seed))
+    model = cn.kachanov_model(cracks, shear_modulus=1.0, poisson_ratio=0.25, friction=0.6)
+    load = model.load_cycle(static=(-1.0, 0.0, -1.0), cyclic=(0.0, 1.0, 0.0))
+    fast, _ = assert_fast_matches_full(model.system, load)
+    assert stopped  # some batches were cut short
+    assert not fast.lam_high_exact.all()
