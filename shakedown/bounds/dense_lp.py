@@ -100,10 +100,10 @@ def _clamped_finish(A, b, e, tab, it):
     point names a basis that is neither primal feasible nor dual feasible, multipliers down to
     ``-8e-7``): multipliers that are zero up to the interior point's accuracy (``1e-4`` of the
     largest) are set to 0 and
-    the dual simplex (:func:`~.dual_simplex.single_dual_simplex`, which recomputes ``x`` and
+    the dual simplex (:func:`~.single_simplex.single_dual_simplex`, which recomputes ``x`` and
     ``y`` of its final basis from scratch) finishes; the answer counts only if certified by its
     own optimality conditions, else ``(None, None)`` (HiGHS)."""
-    from .dual_simplex import single_dual_simplex
+    from .single_simplex import single_dual_simplex
 
     if tab is None or tab.singular:
         return None, None

@@ -40,9 +40,9 @@ from __future__ import annotations
 import numpy as np
 
 from . import dense_lp
-from .dual_simplex import single_dual_simplex
 from .facet_walk import FacetWalk, certified_rows, vertex_rows
 from .outcome import value
+from .single_simplex import single_dual_simplex
 
 #: Exact "max lam" LPs solved first (rows of largest slack at the lam2 optimum).
 INIT_LPS = 1
@@ -271,7 +271,7 @@ class _Pruner:
 def _solve(tab, rows, on_answer, skip, max_pivots=None, stop=None):
     """"max lam" with row ``k`` tight for each ``k`` of ``rows`` from ``tab``'s basis: a few
     LPs on a large problem (long paths, issue 14) one by one with an explicit basis inverse
-    (:func:`~.dual_simplex.single_dual_simplex`), else the batched dual simplex."""
+    (:func:`~.single_simplex.single_dual_simplex`), else the batched dual simplex."""
     if len(rows) <= SINGLE_MAX and tab.n >= SINGLE_MIN_N:
         for g, k in enumerate(rows):
             if not skip(g):

@@ -16,8 +16,8 @@ from test_pruning import assert_fast_matches_full
 
 import crack_networks as cn
 import shakedown as sd
-from shakedown.bounds import dense_lp, dual_simplex, pruning
-from shakedown.bounds.dual_simplex import single_dual_simplex
+from shakedown.bounds import dense_lp, pruning, single_simplex
+from shakedown.bounds.single_simplex import single_dual_simplex
 
 
 def _lp(system, load, dup=False):
@@ -55,7 +55,7 @@ def _kachanov(n, seed):
 def test_single_matches_batch_and_highs(case, monkeypatch):
     # refactorise often on the way (random systems: paths of 1-2 pivots; Kachanov: longer)
     every = 3 if case.startswith("kachanov") else 1
-    monkeypatch.setattr(dual_simplex, "REFACTOR_EVERY", every)
+    monkeypatch.setattr(single_simplex, "REFACTOR_EVERY", every)
     if case == "kachanov60":
         system, load = _kachanov(60, 3)
     else:
@@ -109,7 +109,7 @@ def test_pruning_through_the_single_path(n, seed, monkeypatch):
     monkeypatch.setattr(pruning, "SINGLE_MIN_N", 0)
     monkeypatch.setattr(pruning, "SCREEN_ROWS", 0)  # (a screened LP may finish in the screen)
     monkeypatch.setattr(pruning, "UNSCREENED_LPS", 1)
-    monkeypatch.setattr(dual_simplex, "REFACTOR_EVERY", 16)
+    monkeypatch.setattr(single_simplex, "REFACTOR_EVERY", 16)
     calls = []
     orig = pruning.single_dual_simplex
 
