@@ -100,14 +100,14 @@ def _banded_system(n, seed=0, coupling=0.3, bands=(1, 2, 5), friction=0.3):
     return sd.DiscreteSystem(K[:n, :n], K[:n, n:], K[n:, n:], friction=friction)
 
 
-@pytest.fixture
+@pytest.fixture(scope="session")
 def banded_system():
     """Factory ``banded_system(n, seed=0, coupling=0.3, bands=(1, 2, 5), friction=0.3)``: a dense
     SPD system whose ``K`` has a few bands (its ``to_sparse()`` twin is genuinely sparse)."""
     return _banded_system
 
 
-@pytest.fixture
+@pytest.fixture(scope="session")  # stateless factories: usable under hypothesis too
 def harmonic_load():
     """Factory ``harmonic_load(rng, system, amp=2.0, p_mean=1.0, p_amp=0.3)``: a random
     one-harmonic load (tangential amplitude ``amp`` times the friction, mean normal ``p_mean``,

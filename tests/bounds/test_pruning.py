@@ -206,17 +206,23 @@ def test_walk_certifies_every_face_it_reports():
         assert -res.fun == pytest.approx(b[k], rel=1e-8, abs=1e-9)
 
 
-def test_breaking_the_certificate_check_is_caught(monkeypatch):
-    """A broken check (every point accepted, every row called tight) must make the fast lam1
-    differ from the exact one on a network where pruning matters: the tests above would catch a
-    wrong certificate."""
+def _unscreened_network(monkeypatch):
+    """A 120-crack network and its load, pruning started from one unscreened exact LP (so the
+    walk, its certificates and its descents decide most rows)."""
     monkeypatch.setattr(pruning, "INIT_LPS", 1)
     monkeypatch.setattr(pruning, "UNSCREENED_LPS", 1)
     monkeypatch.setattr(pruning, "SCREEN_ROWS", 0)
     cracks = cn.sample_crack_set(120, density=0.1, half_length=1.0, min_spacing=0.1,
                                  rng=np.random.default_rng(2))
     model = cn.kachanov_model(cracks, shear_modulus=1.0, poisson_ratio=0.25, friction=0.6)
-    load = model.load_cycle(static=(-1.0, 0.0, -1.0), cyclic=(0.0, 1.0, 0.0))
+    return model, model.load_cycle(static=(-1.0, 0.0, -1.0), cyclic=(0.0, 1.0, 0.0))
+
+
+def test_breaking_the_certificate_check_is_caught(monkeypatch):
+    """A broken check (every point accepted, every row called tight) must make the fast lam1
+    differ from the exact one on a network where pruning matters: the tests above would catch a
+    wrong certificate."""
+    model, load = _unscreened_network(monkeypatch)
     good = sd.shakedown_bounds(model.system, load)
     monkeypatch.setattr(facet_walk, "certified_rows",
                         lambda G, b, x, tol=0, Gx=None: np.ones(len(b), bool))
@@ -229,13 +235,7 @@ def test_breaking_the_certificate_check_is_caught(monkeypatch):
 def test_every_descent_lands_on_the_exact_lam_high(monkeypatch):
     """The parametric descents (face empty at the incumbent: follow lam down) end exactly at
     the row's lam_high of the full computation; a perturbed dual certificate is rejected."""
-    monkeypatch.setattr(pruning, "INIT_LPS", 1)
-    monkeypatch.setattr(pruning, "UNSCREENED_LPS", 1)
-    monkeypatch.setattr(pruning, "SCREEN_ROWS", 0)
-    cracks = cn.sample_crack_set(120, density=0.1, half_length=1.0, min_spacing=0.1,
-                                 rng=np.random.default_rng(2))
-    model = cn.kachanov_model(cracks, shear_modulus=1.0, poisson_ratio=0.25, friction=0.6)
-    load = model.load_cycle(static=(-1.0, 0.0, -1.0), cyclic=(0.0, 1.0, 0.0))
+    model, load = _unscreened_network(monkeypatch)
     seen, rejected = [], []
     orig, land = FacetWalk.descend, FacetWalk._land
 

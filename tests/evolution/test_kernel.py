@@ -30,14 +30,6 @@ def coupled(rng, n, fraction=0.5):
     return s.with_friction(fraction * min(s.critical_friction().value, 2.0))
 
 
-def load_of(rng, s, amp=2.0, p_mean=1.0, p_amp=0.3):
-    n = s.n_nodes
-    f = float(s.friction.max())
-    return sd.LoadCycle.from_harmonics(0.1 * rng.normal(size=n), np.full(n, p_mean),
-                                       q_cos=amp * f * rng.normal(size=n),
-                                       p_sin=p_amp * rng.normal(size=n))
-
-
 def assert_same_run(a, b, s):
     assert a.status == b.status
     assert a.n_cycles == b.n_cycles and a.period == b.period
@@ -54,13 +46,13 @@ def assert_same_run(a, b, s):
 
 @pytest.mark.parametrize("seed", range(6))
 @pytest.mark.parametrize("lam", [0.3, 1.0, 2.5])
-def test_kernel_equals_python_steps(seed, lam):
+def test_kernel_equals_python_steps(seed, lam, harmonic_load):
     """Whole runs: compiled periods against the Python step, shakedown to cyclic slip, with
     separation (the normal load dips below zero at some nodes for seeds 3-5)."""
     rng = np.random.default_rng(seed)
     n = 6 + 2 * seed
     s = coupled(rng, n)
-    load = load_of(rng, s, p_mean=1.0 if seed < 3 else 0.2, p_amp=0.3 if seed < 3 else 1.0)
+    load = harmonic_load(rng, s, p_mean=1.0 if seed < 3 else 0.2, p_amp=0.3 if seed < 3 else 1.0)
     v0 = sd.sample_initial_slips(s, load, 1, rng=rng)[0]
     kw = dict(steps_per_cycle=32, max_cycles=60, tol=1e-10, initial_slip=v0)
     fast = StepSolver(s)
@@ -70,13 +62,13 @@ def test_kernel_equals_python_steps(seed, lam):
     assert_same_run(a, b, s)
 
 
-def test_kernel_large_system_uses_updates_and_matches():
+def test_kernel_large_system_uses_updates_and_matches(harmonic_load):
     """N = 60 in full slip: assignments of more than UPDATE_MIN_SIZE unknowns, reached by
     block updates of cached inverses; same runs as the Python step."""
     rng = np.random.default_rng(7)
     n = 60
     s = coupled(rng, n, fraction=0.3)
-    load = load_of(rng, s, amp=6.0, p_mean=1.0, p_amp=0.2)
+    load = harmonic_load(rng, s, amp=6.0, p_mean=1.0, p_amp=0.2)
     fast = StepSolver(s)
     kw = dict(steps_per_cycle=48, max_cycles=40, tol=1e-10)
     a = sd.solve_cycles(s, load, 1.0, solver=fast, **kw)
@@ -154,12 +146,12 @@ def test_kernel_checks_flag_wrong_answers():
         assert kernel._violated(sv, z, q, p, f, ft, dtol, n, mag, target) <= 1.0
 
 
-def test_wrong_kernel_reactions_fail_the_period_check(monkeypatch):
+def test_wrong_kernel_reactions_fail_the_period_check(monkeypatch, harmonic_load):
     """Tangential reactions 1e-6 F off in one step: the per-period equilibrium recomputed with K
     stops the run with a clear message."""
     rng = np.random.default_rng(2)
     s = coupled(rng, 6)
-    load = load_of(rng, s)
+    load = harmonic_load(rng, s)
     real = kernel.march
 
     def wrong(*a):
@@ -173,13 +165,13 @@ def test_wrong_kernel_reactions_fail_the_period_check(monkeypatch):
     assert run.status == "step_failed" and "equilibrium residual" in run.message
 
 
-def test_handed_back_steps_are_finished_by_python():
+def test_handed_back_steps_are_finished_by_python(harmonic_load):
     """With an iteration budget of one, the kernel hands back every step whose guess is wrong;
     the Python step finishes it (Lemke) and the run equals the all-Python run."""
     rng = np.random.default_rng(5)
     n = 8
     s = coupled(rng, n)
-    load = load_of(rng, s, amp=3.0)
+    load = harmonic_load(rng, s, amp=3.0)
     kw = dict(steps_per_cycle=24, max_cycles=40, tol=1e-10)
     fast = StepSolver(s, max_iter=1)
     a = sd.solve_cycles(s, load, 1.0, solver=fast, **kw)
@@ -188,14 +180,14 @@ def test_handed_back_steps_are_finished_by_python():
     assert_same_run(a, b, s)
 
 
-def test_above_critical_friction_statuses():
+def test_above_critical_friction_statuses(harmonic_load):
     """Friction above the sufficient bound, N > 4 (no enumeration): the kernel's steps are
     "solved" as the Python step's are, with the same answers."""
     rng = np.random.default_rng(9)
     n = 6
     s = coupled(rng, n, fraction=1.5)
     assert s.critical_friction().well_posed is False
-    load = load_of(rng, s)
+    load = harmonic_load(rng, s)
     kw = dict(steps_per_cycle=24, max_cycles=40, tol=1e-10)
     a = sd.solve_cycles(s, load, 1.0, solver=StepSolver(s), **kw)
     b = sd.solve_cycles(s, load, 1.0, solver=StepSolver(s, kernel=False), **kw)
@@ -204,12 +196,12 @@ def test_above_critical_friction_statuses():
 
 
 @pytest.mark.parametrize("force, length", [(1e6, 1e-3), (1e-4, 1e3)])
-def test_kernel_units(force, length):
+def test_kernel_units(force, length, harmonic_load):
     """Forces x force, lengths x length: W scales by force x length, slips by length."""
     rng = np.random.default_rng(4)
     n = 10
     s = coupled(rng, n)
-    load = load_of(rng, s, amp=3.0)
+    load = harmonic_load(rng, s, amp=3.0)
     k = force / length
     s2 = sd.DiscreteSystem(k * s.A, k * s.B, k * s.C, friction=s.friction)
     load2 = load.scaled(force)
@@ -235,14 +227,14 @@ def test_environment_switch_turns_the_kernel_off():
     assert out.stdout.split() == ["False", "periodic"]
 
 
-def test_runs_sharing_a_solver_equal_independent_runs():
+def test_runs_sharing_a_solver_equal_independent_runs(harmonic_load):
     """As the study runs them: the states of one (system, lam) one after the other on one
     solver (its kernel cache: hits and block updates from earlier runs' inverses) give the
     steady W and states of independent runs with fresh solvers, to the solver tolerance."""
     rng = np.random.default_rng(13)
     n = 50
     s = coupled(rng, n, fraction=0.3)
-    load = load_of(rng, s, amp=5.0)
+    load = harmonic_load(rng, s, amp=5.0)
     V0 = sd.sample_initial_slips(s, load, 4, rng=rng)
     kw = dict(steps_per_cycle=32, max_cycles=60, tol=1e-10)
     shared = StepSolver(s)
@@ -255,7 +247,7 @@ def test_runs_sharing_a_solver_equal_independent_runs():
 
 @pytest.mark.parametrize("case", ["one_node", "uncoupled", "frictionless", "zero_load",
                                   "stiff_contrast"])
-def test_kernel_extremes_equal_python(case):
+def test_kernel_extremes_equal_python(case, harmonic_load):
     """Extremes: one node, B = 0, friction 0, no load at all, stiffness ratios 1e6 between
     nodes; the compiled periods give the Python step's runs."""
     rng = np.random.default_rng(21)
@@ -270,7 +262,7 @@ def test_kernel_extremes_equal_python(case):
         D = np.block([[d, np.zeros((n, n))], [np.zeros((n, n)), d]]) ** 0.5
         K = D @ s.K @ D
         s = sd.DiscreteSystem(K[:n, :n], K[:n, n:], K[n:, n:], friction=s.friction)
-    load = load_of(rng, s)
+    load = harmonic_load(rng, s)
     if case == "zero_load":
         load = sd.LoadCycle.from_harmonics(np.zeros(n), np.zeros(n), q_cos=np.zeros(n))
     kw = dict(steps_per_cycle=24, max_cycles=60, tol=1e-10)
@@ -287,19 +279,19 @@ def test_kernel_extremes_equal_python(case):
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(seed=st.integers(0, 10**6), n=st.integers(1, 14), lam=st.floats(0.0, 4.0),
        fraction=st.floats(0.05, 0.95), p_mean=st.floats(-0.2, 1.5))
-def test_kernel_equals_python_property(seed, n, lam, fraction, p_mean):
+def test_kernel_equals_python_property(seed, n, lam, fraction, p_mean, harmonic_load):
     """Random coupled systems, loads (tensile mean normal loads included: separation) and load
     factors: the compiled periods and the Python step give the same run."""
     rng = np.random.default_rng(seed)
     s = coupled(rng, n, fraction=fraction)
-    load = load_of(rng, s, amp=3.0, p_mean=p_mean, p_amp=0.8)
+    load = harmonic_load(rng, s, amp=3.0, p_mean=p_mean, p_amp=0.8)
     kw = dict(steps_per_cycle=16, max_cycles=40, tol=1e-10)
     a = sd.solve_cycles(s, load, lam, solver=StepSolver(s), **kw)
     b = sd.solve_cycles(s, load, lam, solver=StepSolver(s, kernel=False), **kw)
     assert_same_run(a, b, s)
 
 
-def test_ill_conditioned_assignments_fall_back_to_lu():
+def test_ill_conditioned_assignments_fall_back_to_lu(harmonic_load):
     """cond(K) = 1e8: many assignment systems are too ill-conditioned for an explicit inverse
     (not backward stable); the kernel solves them by LU, and the run matches the Python
     step's (LU throughout): same status, no Lemke, every step verified, the same dissipation
@@ -312,7 +304,7 @@ def test_ill_conditioned_assignments_fall_back_to_lu():
     K = 0.5 * (K + K.T)
     s = sd.DiscreteSystem(K[:n, :n], K[:n, n:], K[n:, n:], friction=1.0)
     s = s.with_friction(0.5 * min(s.critical_friction().value, 2.0))
-    load = load_of(rng, s, amp=1e-3, p_mean=1e-3, p_amp=1e-4)
+    load = harmonic_load(rng, s, amp=1e-3, p_mean=1e-3, p_amp=1e-4)
     kw = dict(steps_per_cycle=24, max_cycles=10, tol=1e-10)
     fast = StepSolver(s)
     a = sd.solve_cycles(s, load, 1.0, solver=fast, **kw)
