@@ -79,7 +79,8 @@ class HighsModel:
             self.resolved += 1
             if again.status == "optimal" and again.max_residual < ans.max_residual:
                 ans = again
-        if method != "simplex" or self.resolved:
+            method = "ipm"  # (the solver option is set back below)
+        if method != "simplex":
             lp._h.setOptionValue("solver", "simplex")
         for k in tight:
             lp.set_row_bounds(k, -np.inf, self.c[k])
@@ -145,8 +146,7 @@ def solve_highs(cs: ConstraintSet, has_periodic_part: bool, intervals, adjacency
     if sparse and separation and status != "infeasible":  # next to the lam2 basis: cheap
         sep_answer = eng.run("max", separation=True)
     pruned = None
-    if (intervals == "lam1" and sp.issparse(cs.G) and status == "bounded"
-            and main.status == "optimal"):
+    if intervals == "lam1" and sparse and status == "bounded" and main.status == "optimal":
         pruned = intervals_pruned(eng, cs, lam2, v_at_lam2)
     if pruned is not None:
         out.lam_low, out.lam_high, out.hi_exact = pruned

@@ -44,23 +44,29 @@ def row_max(G) -> np.ndarray:
     return abs(G).max(axis=1).toarray().ravel() if sp.issparse(G) else np.abs(G).max(axis=1)
 
 
+def _slack(cs, x, lam, gmax):
+    """Slack of every row of ``G v <= c + lam m`` at ``v = x``, and each row's force scale
+    ``max|G_k| max(|v|, 1) + |c_k + lam m_k|``."""
+    b = cs.c + lam * cs.m
+    scale = gmax * max(np.abs(x).max(initial=0.0), 1.0) + np.abs(b)
+    return b - cs.G @ x, np.maximum(scale, 1e-300)
+
+
 def tight_rows(cs, x, lam, gmax=None):
     """Rows of ``G v <= c + lam m`` tight at ``v = x`` (slack below :data:`TIGHT_RTOL` of the
     row's scale ``max|G_k| max|v| + |c_k + lam m_k|``; ``gmax``: :func:`row_max` of ``G``)."""
-    b = cs.c + lam * cs.m
-    slack = b - cs.G @ x
-    gmax = row_max(cs.G) if gmax is None else gmax
-    scale = gmax * max(np.abs(x).max(initial=0.0), 1.0) + np.abs(b)
-    return np.flatnonzero(np.abs(slack) <= TIGHT_RTOL * np.maximum(scale, 1e-300))
+    slack, scale = _slack(cs, x, lam, row_max(cs.G) if gmax is None else gmax)
+    return np.flatnonzero(np.abs(slack) <= TIGHT_RTOL * scale)
 
 
-def family_vertices(cs, lam, undecided):
+def family_vertices(cs, lam, undecided, gmax=None):
     """Cheap covering: the point where every row of one family (all ``I``, then all ``II``) is
     tight, by one sparse solve each; when it lies in ``H(lam)`` (checked row by row, the same
     test as an LP vertex's) all ``N`` rows of the family are marked decided.  At ``lam = 0``
     under a compressive static load the all-``I`` point is in ``H(0)`` exactly when every
     normal reaction there stays compressive, so this usually settles every ``lam_low``."""
     n = cs.n_nodes
+    gmax = row_max(cs.G) if gmax is None else gmax
     b = cs.c + lam * cs.m
     for rows in (np.arange(n), np.arange(n, 2 * n)):
         if not undecided[rows].any():
@@ -71,21 +77,19 @@ def family_vertices(cs, lam, undecided):
             continue
         if not np.all(np.isfinite(x)):
             continue
-        slack = b - cs.G @ x
-        gmax = row_max(cs.G)
-        scale = gmax * max(np.abs(x).max(initial=0.0), 1.0) + np.abs(b)
+        slack, scale = _slack(cs, x, lam, gmax)
         if np.all(slack >= -TIGHT_RTOL * scale):
-            undecided[tight_rows(cs, x, lam, gmax)] = False
+            undecided[np.abs(slack) <= TIGHT_RTOL * scale] = False
 
 
-def cover(eng, cs, lam, undecided, max_lps=64):
+def cover(eng, cs, lam, undecided, max_lps=64, gmax=None):
     """Rows whose face is non-empty at ``lam``, found by covering LPs: ``lam`` fixed,
     maximise the sum of the normals of the undecided rows of one family (all ``I`` or all
     ``II``; the two families of one node point opposite ways) so that the optimal vertex makes
     as many of them tight as it can.  Marks them in ``undecided`` (set to ``False``); stops when
     an LP adds nothing new.  Returns the number of LPs."""
     n = cs.n_nodes
-    gmax = row_max(cs.G)
+    gmax = row_max(cs.G) if gmax is None else gmax
     eng.lp.set_col_bounds(n, lam, lam)
     lps = 0
     try:
@@ -122,8 +126,8 @@ def intervals_pruned(eng, cs, lam2, v_at_lam2):
     gmax = row_max(cs.G)
     # lam_low: the two family points, covering LPs at lam = 0, then one LP per row left
     undecided = np.ones(R, bool)
-    family_vertices(cs, 0.0, undecided)
-    cover(eng, cs, 0.0, undecided)
+    family_vertices(cs, 0.0, undecided, gmax)
+    cover(eng, cs, 0.0, undecided, gmax=gmax)
     lo = np.where(undecided, np.nan, 0.0)
     for k in np.flatnonzero(undecided):
         if not np.isnan(lo[k]):
