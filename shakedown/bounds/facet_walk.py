@@ -28,6 +28,9 @@ import scipy.linalg as sla
 WALK_TOL = 1e-9
 #: Smallest ``G_i d`` that limits a primal step (rows have unit norm).
 STEP_TOL = 1e-9
+#: Vertices of a walk checked together (one product ``G X``; the slacks in between are
+#: updated, not recomputed).
+CHECK_BATCH = 16
 
 
 def certified_rows(G, b, x, tol=WALK_TOL, Gx=None):
@@ -117,6 +120,7 @@ class FacetWalk:
 
     def _walk(self, g, k, cap):
         y = None  # multipliers B^-T g, updated with the basis (recomputed after a reinversion)
+        self._buffer = []
         for it in range(cap + 1):
             if self.broken:
                 return None
@@ -131,22 +135,14 @@ class FacetWalk:
                 r = int(np.argmin(y))
                 optimal = y[r] >= -1e-11 * max(float(np.abs(y).max()), 1e-300)
             if optimal or it == cap:
-                if not self._certify():
+                if not self._flush():
                     return None
                 return True if k >= 0 and self.covered[k] else (False if optimal else None)
             d = -self.Binv[:, r]  # G_T d = -e_r: row T_r loosens, the others stay tight
-            # two matrix-vector products (faster than one product with a 2-column matrix)
-            before = self.reinversions
-            if not self._certify(self.G @ self.x):
-                return None
-            if k >= 0 and self.covered[k]:
-                return True
-            if self.reinversions != before:  # the check re-inverted: price again
-                y = None
-                continue
             Gd = self.G @ d
             ok = (Gd > STEP_TOL) & ~self.inb
             if not ok.any():
+                self._flush()
                 return None  # unbounded direction: cannot happen with k among the rows
             ratio = np.where(ok, np.maximum(self.s, 0.0) / np.where(ok, Gd, 1.0), np.inf)
             tmin = ratio.min()
@@ -160,11 +156,39 @@ class FacetWalk:
             self.Binv = sla.blas.dger(-1.0 / Gd[p], w, d, a=self.Binv.T, overwrite_a=True).T
             y = y + (y[r] / Gd[p]) * w
             self.x = self.x + step * d
+            self.s -= step * Gd  # updated slacks (the ratio test); exact ones come in batches
+            self.s[p] = 0.0
             self.inb[self.T[r]] = False
             self.inb[p] = True
             self.T[r] = p
             self.pivots += 1
+            self._buffer.append(self.x)
+            near_k = k >= 0 and self.s[k] <= 10 * WALK_TOL * (
+                max(float(np.abs(self.x).max()), 1.0) + abs(self.b[k]))
+            if near_k or len(self._buffer) >= CHECK_BATCH:
+                before = self.reinversions
+                if not self._flush():
+                    return None
+                if self.reinversions != before:  # the check re-inverted: price again
+                    y = None
+        self._flush()
         return None
+
+    def _flush(self) -> bool:
+        """Check the vertices visited since the last check, all with one product ``G X``; their
+        tight rows join ``covered`` (a vertex that fails its check adds nothing).  The current
+        vertex must pass (else the basis is re-inverted and checked, :meth:`_certify`); its
+        exact slacks replace the updated ones.  ``False``: the walk is broken."""
+        X = self._buffer
+        self._buffer = []
+        if not X or X[-1] is not self.x:
+            return self._certify()
+        GX = self.G @ np.column_stack(X)
+        for i in range(len(X) - 1):
+            tight = certified_rows(self.G, self.b, X[i], Gx=GX[:, i])
+            if tight is not None:
+                self.covered |= tight
+        return self._certify(GX[:, -1])
 
 
     def descend(self, k: int, c, m, lam: float, max_steps: int):

@@ -40,6 +40,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import dense_lp
+from .barycentric_walk import BarycentricWalk, SimplexFrame
 from .facet_walk import FacetWalk, certified_rows, vertex_rows
 from .outcome import value
 from .single_simplex import single_dual_simplex
@@ -87,6 +88,8 @@ class _Pruner:
         self.lower = np.full(self.R, -np.inf)
         self.best = None  # (value, row, answer) of the smallest exact lam_high with a basis
         self.take(None, main, lam2_answer=True)
+        self.main = main
+        self.frame = False  # the lam2 simplex (SimplexFrame), built on first use
 
     # ---------------------------------------------------------------- answers
     def take(self, k, ans, lam2_answer=False, cap=None):
@@ -180,7 +183,19 @@ class _Pruner:
         T = vertex_rows(self.G, self.m, ans.basis[ans.basis < self.R], keep=k)
         if T is None:
             return None
-        walk = FacetWalk(self.G, self.c + val * self.m, T)
+        walk = self.fast_walk(val, T) or FacetWalk(self.G, self.c + val * self.m, T)
+        return walk if walk.ok else None
+
+    def fast_walk(self, t, T):
+        """A walk in barycentric coordinates of the lam2 simplex from the vertex ``T`` of
+        ``H(t)`` (:mod:`.barycentric_walk`), or ``None`` where it does not apply."""
+        if self.frame is False:
+            B = np.asarray(self.main.basis, int)
+            self.frame = SimplexFrame.of(self.G, self.c, self.m, B, self.main.x[: self.n],
+                                         self.lam2)
+        if self.frame is None or not t < self.lam2:
+            return None
+        walk = BarycentricWalk(self.frame, t, T)
         return walk if walk.ok else None
 
     def capped_lps(self, walk, t, rows):
@@ -237,11 +252,23 @@ class _Pruner:
                     first = [j for j in priority if todo[j]]
                     k = first[0] if first else int(left[np.argmin(walk.s[left])])
                     res = walk.walk_to(k, WALK_CAP)
+                    if res is None and walk.broken and isinstance(walk, BarycentricWalk):
+                        walk = walk.facet_walk()  # too many tight rows: go on in v
+                        if walk is None:
+                            pending.append(k)
+                            break
+                        res = walk.walk_to(k, WALK_CAP)
                     if res is None and not walk.broken:  # undecided: go on to a decision
                         res = walk.walk_to(k, LONG_WALK_CAP)
+                    if res is False and isinstance(walk, BarycentricWalk):
+                        walk = walk.facet_walk()  # the descent walks in v
+                        if walk is None:
+                            pending.append(k)
+                            break
                     if res is False:  # face k empty at t: follow lam down to lam_high_k
                         lam = walk.descend(k, self.c, self.m, t, DESCENT_CAP)
                         if lam is not None:
+                            walk = self.fast_walk(lam, walk.T) or walk
                             self.hi[k], self.exact[k] = min(lam, self.lam2), True
                             self.best = (lam, k, None)
                             t = lam  # the walk is at a vertex of H(lam) with k tight

@@ -1,0 +1,188 @@
+"""Facet walks in barycentric coordinates of the ``lam2`` simplex (issue 14).
+
+The walk works with an ``(m + 1)``-square basis (``m`` rows outside the ``lam2`` basis tight);
+everything it reports is checked in ``v``.  These tests compare its decisions with independent
+LPs (HiGHS via ``linprog``), check the simplex's vertices against direct solves, feed it wrong
+data (its check must reject every point), and run the pruning with the hand-over to the walk in
+``v`` forced (tight-row limit 1) against every interval computed exactly.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.optimize import linprog
+from test_bounds import random_problem
+from test_pruning import _unscreened_network, assert_fast_matches_full
+
+import shakedown as sd
+from shakedown.bounds import pruning
+from shakedown.bounds.barycentric_walk import BarycentricWalk, SimplexFrame
+
+
+def _problem(n, seed):
+    """Unit-norm rows ``G v <= c + lam m``, the lam2 optimum and its basis (tight rows)."""
+    system, load = random_problem(n, seed)
+    cs = sd.bounds.extreme_constraints(system, load)
+    nrm = np.linalg.norm(cs.G, axis=1)
+    G, c, m = cs.G / nrm[:, None], cs.c / nrm, cs.m / nrm
+    res = linprog(np.r_[np.zeros(n), -1.0], A_ub=np.hstack([G, -m[:, None]]), b_ub=c,
+                  bounds=[(None, None)] * n + [(0, None)], method="highs-ds")
+    x2, lam2 = res.x[:n], res.x[-1]
+    s = c + lam2 * m - G @ x2
+    B = np.argsort(np.abs(s))[: n + 1]
+    assert np.abs(s[B]).max() <= 1e-9 and np.sort(np.abs(s))[n + 1] > 1e-7  # nondegenerate
+    return G, c, m, B, x2, lam2
+
+
+def _vertex(G, b, seed):
+    """Rows defining a vertex of ``{G v <= b}`` (minimum of a random objective)."""
+    n = G.shape[1]
+    g = np.random.default_rng(seed).standard_normal(n)
+    res = linprog(g, A_ub=G, b_ub=b, bounds=(None, None), method="highs-ds")
+    T = np.flatnonzero(np.abs(b - G @ res.x) <= 1e-9 * (1 + np.abs(b)))
+    assert len(T) == n
+    return T
+
+
+def _face_nonempty(G, b, k):
+    res = linprog(-G[k], A_ub=G, b_ub=b, bounds=(None, None), method="highs")
+    return bool(-res.fun >= b[k] - 1e-9 * (1 + abs(b[k])))
+
+
+@pytest.mark.parametrize("n,seed", [(12, 0), (30, 1)])
+def test_simplex_vertices_and_rows(n, seed):
+    """``V_a(t)``: every row of ``B`` tight except row ``a`` (slack ``gap_a``); ``h(t)`` is
+    ``G_J V(t) - b_J(t)`` computed directly."""
+    G, c, m, B, x2, lam2 = _problem(n, seed)
+    f = SimplexFrame.of(G, c, m, B, x2, lam2)
+    assert f is not None
+    t = 0.7 * lam2
+    b = c + t * m
+    V = x2[:, None] + (lam2 - t) * f.D
+    for a in range(n + 1):
+        rows = np.delete(B, a)
+        np.testing.assert_allclose(V[:, a], np.linalg.solve(G[rows], b[rows]), atol=1e-9)
+    S = G[B] @ V - b[B][:, None]
+    assert np.all(np.diag(S) < 0)
+    np.testing.assert_allclose(np.diag(S), (lam2 - t) * f.sigma, rtol=1e-9)
+    np.testing.assert_allclose(f.h(t), G[f.J] @ V - b[f.J][:, None], atol=1e-9)
+
+
+def test_frame_refuses_what_is_not_a_simplex():
+    n = 12
+    G, c, m, B, x2, lam2 = _problem(n, 0)
+    R = len(c)
+    assert SimplexFrame.of(G, c, m, np.r_[B[:-1], R], x2, lam2) is None  # the lam >= 0 row
+    assert SimplexFrame.of(G, c, m, B[:-1], x2, lam2) is None  # too few rows
+    assert SimplexFrame.of(G, c, m, np.r_[B[:-1], B[0]], x2, lam2) is None  # a repeated row
+    rng = np.random.default_rng(0)
+    refused = 0
+    for _ in range(20):  # random row sets: multipliers of both signs, no bounded simplex
+        S = rng.choice(R, n + 1, replace=False)
+        Q = np.hstack([G[S], m[S, None]])
+        y = -np.linalg.inv(Q)[n]
+        if y.min() < 0:
+            assert SimplexFrame.of(G, c, m, S, x2, lam2) is None
+            refused += 1
+    assert refused
+
+
+@pytest.mark.parametrize("n,seed,frac", [(12, 0, 0.5), (30, 1, 0.9), (30, 2, 0.99)])
+def test_walk_decisions_match_independent_lps(n, seed, frac):
+    """For every row: ``True`` only where the face is non-empty at ``t`` (and then the row is
+    covered by a checked vertex), ``False`` only where it is empty (HiGHS, per row)."""
+    G, c, m, B, x2, lam2 = _problem(n, seed)
+    f = SimplexFrame.of(G, c, m, B, x2, lam2)
+    t = frac * lam2
+    b = c + t * m
+    w = BarycentricWalk(f, t, _vertex(G, b, seed))
+    assert w.ok
+    empty = 0
+    for k in f.J:
+        res = w.walk_to(int(k), 500)
+        assert not w.broken
+        truth = _face_nonempty(G, b, k)
+        assert res is truth  # every row decided (short walks at this size), and rightly
+        if res:
+            assert w.covered[k]
+        else:
+            empty += 1
+            w = BarycentricWalk(f, t, w.T)  # go on from the same vertex, as the pruning does
+            assert w.ok
+    assert empty or frac < 0.99  # near lam2 some faces are empty
+    for k in np.flatnonzero(w.covered):
+        assert _face_nonempty(G, b, k)
+    # the vertex it reports in v is the one it walked to
+    x = np.linalg.solve(G[w.T], b[w.T])
+    assert np.max(G @ x - b) <= 1e-9
+    np.testing.assert_allclose(w.s, b - G @ x, atol=1e-9)  # the slacks that rank targets
+
+
+def test_wrong_barycentric_data_is_never_certified():
+    """A corrupted frame maps vertices to wrong points: the check in ``v`` rejects the start;
+    corrupted rows ``h`` let the walk believe a row is tight where it is not: never covered."""
+    n, seed = 30, 2
+    G, c, m, B, x2, lam2 = _problem(n, seed)
+    f = SimplexFrame.of(G, c, m, B, x2, lam2)
+    t = 0.99 * lam2
+    b = c + t * m
+    T = _vertex(G, b, seed)
+    good = BarycentricWalk(f, t, T)
+    assert good.ok
+    bad = SimplexFrame.of(G, c, m, B, x2, lam2)
+    bad.D = bad.D * (1 + 1e-3)
+    assert not BarycentricWalk(bad, t, T).ok
+    empty = [int(k) for k in f.J if not _face_nonempty(G, b, k)]
+    assert empty
+    w = BarycentricWalk(f, t, T)
+    for k in empty:
+        kl = f.loc[k]
+        w.H[kl] += 10 * np.abs(w.H).max()  # the walk now sees row k cut every vertex
+        w.HF = np.asfortranarray(w.H)
+        assert w.walk_to(k, 500) is not True
+        assert not w.covered[k]
+
+
+def test_pruning_hands_over_to_the_walk_in_v(monkeypatch):
+    """Every barycentric walker breaks down at its fifth pivot (as at the tight-row limit): the
+    pruning goes on in ``v`` from the same vertex, and the answers are those of every interval
+    computed exactly."""
+    model, load = _unscreened_network(monkeypatch)
+    seen = []
+    orig, pivot = BarycentricWalk.facet_walk, BarycentricWalk._pivot
+
+    def facet_walk(self):
+        seen.append(self.broken)
+        return orig(self)
+
+    def breaking_pivot(self, g, kl):
+        return None if self.pivots >= 4 else pivot(self, g, kl)
+
+    monkeypatch.setattr(BarycentricWalk, "facet_walk", facet_walk)
+    monkeypatch.setattr(BarycentricWalk, "_pivot", breaking_pivot)
+    assert_fast_matches_full(model.system, load)
+    assert any(seen)
+
+
+def test_pruning_uses_the_barycentric_walk_and_agrees(monkeypatch):
+    """The default pruning on a network walks in barycentric coordinates (counted) and gives
+    the exact answers; with the walk disabled (the walk in ``v`` only) the same ``lam1``."""
+    model, load = _unscreened_network(monkeypatch)
+    pivots = []
+    orig = BarycentricWalk.walk_to
+
+    def walk_to(self, k, cap):
+        p0 = self.pivots
+        out = orig(self, k, cap)
+        pivots.append(self.pivots - p0)
+        return out
+
+    monkeypatch.setattr(BarycentricWalk, "walk_to", walk_to)
+    assert_fast_matches_full(model.system, load)
+    assert sum(pivots) > 0
+    fast = sd.shakedown_bounds(model.system, load)
+    monkeypatch.setattr(pruning._Pruner, "fast_walk", lambda self, t, T: None)
+    slow = sd.shakedown_bounds(model.system, load)
+    assert fast.lam1 == pytest.approx(slow.lam1, rel=1e-12)
+    assert fast.limiting_constraint == slow.limiting_constraint
