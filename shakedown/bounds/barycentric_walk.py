@@ -1,30 +1,34 @@
-"""Facet walks in barycentric coordinates of the ``lam2`` simplex (issue 14).
+"""Facet walks in the coordinates of the ``lam2`` basis (issue 14).
 
 At the ``lam2`` optimum ``(x*, lam2)`` of ``max lam, G v <= c + lam m`` an optimal basis has
-``N + 1`` rows ``B`` with multipliers ``y > 0``, ``G_B^T y = 0``: their normals span space
-positively, so for ``t < lam2`` the rows ``B`` alone bound a simplex ``S(t) = x* + (lam2 - t)
-S(0)`` -- homothetic about ``x*``.  Its vertices are ``V_a(t) = x* + (lam2 - t) d_a`` with
-``[G_B, m_B] [d_a; 1] = sigma_a e_a`` (``sigma_a = -1 / y_a < 0``: row ``a`` is the one vertex
-``a`` leaves slack).  Every point of ``S(t)`` is ``v = sum_a lambda_a V_a(t)`` with ``lambda``
-in the unit simplex, and for every other row ``j``
+``N + 1`` rows ``B``; ``Q = [G_B, -m_B]`` is non-singular, so the slacks ``sigma = b_B(lam) -
+G_B v`` of those rows are coordinates of ``(v, lam)``: with ``Q^-1 = [E; y^T]``,
 
-    G_j v - b_j(t) = sum_a lambda_a h_ja(t),    h_ja(t) = G_j V_a(t) - b_j(t),
+    v = x* - E sigma,    lam = lam2 - y . sigma,
 
-while row ``a`` of ``B`` reads ``lambda_a >= 0``.  So ``H(t) = {lambda >= 0, sum lambda = 1,
-h_j . lambda <= 0}``: the ``N + 1`` rows of ``B`` have become simple bounds.  A vertex of
-``H(t)`` at which ``m`` rows outside ``B`` are tight has ``m + 1`` positive coordinates, and
-the primal simplex on it works with an ``(m + 1)``-square basis: a pivot costs ``O(N m)``
-instead of the ``O(N^2)`` of the walk in ``v`` (:class:`~.facet_walk.FacetWalk`).  Near
-``lam2`` (where the pruning's walks go: ``t`` is the incumbent ``lam1`` candidate) ``m`` is
-small: on random systems 28 at N = 500, 58 at N = 1000.
+(``y`` are the multipliers of the optimum, ``y >= 0``).  The rows of ``B`` become the simple
+bounds ``sigma >= 0``, a load factor ``t`` the one equation ``y . sigma = lam2 - t``, and every
+other row ``j``
+
+    G_j v <= b_j(t)   <=>   K_j . sigma <= r_j(t),   K_j = -G_j E,   r_j = b_j(t) - G_j x*.
+
+(For ``y > 0`` these are barycentric coordinates of the simplex ``{G_B v <= b_B(t)}``, which is
+homothetic about ``x*``: ``lambda_a = y_a sigma_a / (lam2 - t)``; zero multipliers, as on
+degenerate optima, are allowed.)  A vertex of ``H(t)`` at which ``m`` rows outside ``B`` are
+tight has at most ``m + 1`` non-zero coordinates, and the primal simplex on it works with an
+``(m + 1)``-square basis: a pivot costs ``O(N m)`` instead of the ``O(N^2)`` of the walk in
+``v`` (:class:`~.facet_walk.FacetWalk`).  Near ``lam2`` (where the pruning's walks go: ``t`` is
+the incumbent ``lam1`` candidate) ``m`` is small: on random systems 28 at N = 500, 58 at
+N = 1000.  The one ``O(N^3)`` product ``G E`` is shared by every ``t``.
 
 :class:`BarycentricWalk` has the interface the pruning uses of a ``FacetWalk`` (``walk_to``,
-``covered``, ``s``, ``T``, ``pivots``, ``broken``).  Nothing is concluded in barycentric
-coordinates: each vertex that would cover new rows is mapped back to ``v`` and checked there
-from scratch (:func:`~.facet_walk.certified_rows`, a batch of vertices with one product
-``G X``); only the rows tight at a checked vertex are ``covered``.  A walk that ends at an
-optimum with the target slack (``False``: face empty) hands over to a ``FacetWalk`` at the same
-vertex (:meth:`BarycentricWalk.facet_walk`) for the descent to the target's ``lam_high``.
+``covered``, ``s``, ``T``, ``pivots``, ``broken``).  Nothing is concluded in these coordinates:
+each vertex that would cover new rows is mapped back to ``v`` and checked there from scratch
+(:func:`~.facet_walk.certified_rows`, a batch of vertices with one product ``G X``); only the
+rows tight at a checked vertex are ``covered``.  A walk that ends at an optimum with the target
+slack (``False``: face empty) hands over to a ``FacetWalk`` at the same vertex
+(:meth:`BarycentricWalk.facet_walk`) for the descent to the target's ``lam_high``; so does a
+walk that breaks down (too many tight rows, a singular working basis, a failed check).
 """
 
 from __future__ import annotations
@@ -48,25 +52,23 @@ PIV_TOL = 1e-11
 
 
 class SimplexFrame:
-    """The ``t``-independent part: vertex directions ``d_a`` and the products ``G d_a``.
+    """The ``t``-independent part: ``E``, ``y`` and the rows ``K = -G_J E`` (module docstring).
 
-    Built once per pruning from the ``lam2`` optimum; ``None`` from :meth:`of` when the optimal
-    basis does not bound a simplex (a multiplier ``y_a <= 0``: degenerate optimum, or a basic
-    row that is not a constraint row).
+    Built once per pruning from the ``lam2`` optimum; ``None`` from :meth:`of` when the basis
+    is not ``N + 1`` distinct constraint rows with a well-conditioned ``Q``.
     """
 
-    def __init__(self, G, c, m, B, x2, lam2, D, sigma):
+    def __init__(self, G, c, m, B, x2, lam2, E, y):
         self.G, self.c, self.m = G, c, m
         self.R, self.n = G.shape
         self.B = np.asarray(B, int)
-        self.x2, self.lam2, self.D, self.sigma = x2, float(lam2), D, sigma
-        self.pos = np.full(self.R, -1)  # row -> position in B (or -1)
-        self.pos[self.B] = np.arange(len(self.B))
-        self.J = np.flatnonzero(self.pos < 0)
+        self.x2, self.lam2, self.E, self.y = x2, float(lam2), E, y
+        self.J = np.flatnonzero(np.isin(np.arange(self.R), self.B, invert=True))
         self.loc = np.full(self.R, -1)  # row -> position in J (or -1)
         self.loc[self.J] = np.arange(len(self.J))
         self.GJx = G[self.J] @ x2
-        self.GJD = G[self.J] @ D  # (|J|, N + 1): the one O(N^3) product
+        self.K = -(G[self.J] @ E)  # (|J|, N + 1): the one O(N^3) product
+        self.KF = np.asfortranarray(self.K)
 
     @classmethod
     def of(cls, G, c, m, basis, x2, lam2):
@@ -76,23 +78,20 @@ class SimplexFrame:
         B = np.asarray(basis, int)
         if len(B) != n + 1 or np.any(B >= R) or len(np.unique(B)) != n + 1 or not lam2 > 0:
             return None
-        Q = np.hstack([G[B], m[B, None]])
+        Q = np.hstack([G[B], -m[B, None]])
         with warnings.catch_warnings():
-            warnings.simplefilter("ignore", sla.LinAlgWarning)
+            warnings.simplefilter("error", sla.LinAlgWarning)  # ill-conditioned: refused
             try:
                 Qi = sla.inv(Q, check_finite=False)
-            except (np.linalg.LinAlgError, ValueError):
+            except (np.linalg.LinAlgError, ValueError, sla.LinAlgWarning):
                 return None
-        y = -Qi[n]  # multipliers of the lam2 optimum: y^T [G_B, -m_B] = [0, 1]
-        if not np.all(np.isfinite(Qi)) or not y.min() > 1e-9 * np.abs(y).max():
+        if not np.all(np.isfinite(Qi)):
             return None
-        D = Qi[:n] / Qi[n][None, :]  # d_a = sigma_a Qi[:n, a], sigma_a = 1 / Qi[n, a]
-        return cls(G, c, m, B, x2, lam2, D, 1.0 / Qi[n])
+        return cls(G, c, m, B, x2, lam2, Qi[:n], Qi[n])
 
-    def h(self, t):
-        """``h_ja(t)`` for the rows ``J`` outside the basis, shape ``(|J|, N + 1)``."""
-        bJ = self.c[self.J] + t * self.m[self.J]
-        return (self.GJx - bJ)[:, None] + (self.lam2 - t) * self.GJD
+    def r(self, t):
+        """``r_j(t) = b_j(t) - G_j x*`` for the rows ``J`` outside the basis."""
+        return self.c[self.J] + t * self.m[self.J] - self.GJx
 
 
 class BarycentricWalk:
@@ -119,10 +118,8 @@ class BarycentricWalk:
         self._buffer = []
         if not (0.0 <= self.t < frame.lam2):
             return
-        self.H = frame.h(self.t)
-        self.HF = np.asfortranarray(self.H)
-        self.scale = frame.lam2 - self.t
-        self.gap = -self.scale * frame.sigma  # slack of row a of B per unit of lambda_a
+        self.rJ = frame.r(self.t)
+        self.tau = frame.lam2 - self.t
         T = np.asarray(T, int)
         inT = np.zeros(self.R, bool)
         inT[T] = True
@@ -131,19 +128,19 @@ class BarycentricWalk:
         if (len(self.P) != len(self.Tl) + 1 or len(self.Tl) > self.limit
                 or not self._factor()):
             return
-        tol = 1e-9 * max(1.0, float(np.abs(self.lamP).max()))
-        if self.lamP.min() < -tol or self.sigma.min() < -1e-9 * (1.0 + np.abs(self.H).max()):
+        if (self.sP.min() < -1e-9 * max(1.0, float(np.abs(self.sP).max()))
+                or self.sJ.min() < -1e-9 * (1.0 + float(np.abs(self.rJ).max()))):
             return
         self._buffer.append(self._vertex())
         self.ok = self._flush()
 
     # ------------------------------------------------------------------ state
     def _factor(self) -> bool:
-        """Factor the working basis ``[H_{T,P}; 1]`` and recompute the vertex from it."""
+        """Factor the working basis ``[K_{T,P}; y_P]`` and recompute the vertex from it."""
         P, Tl = self.P, self.Tl
-        M = np.ones((len(P), len(P)))
-        if Tl:
-            M[:-1] = self.H[np.ix_(Tl, P)]
+        M = np.empty((len(P), len(P)))
+        M[:-1] = self.f.K[np.ix_(Tl, P)]
+        M[-1] = self.f.y[P]
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", sla.LinAlgWarning)
             lu = sla.lu_factor(M, check_finite=False)
@@ -151,11 +148,9 @@ class BarycentricWalk:
         if not d.min() > 1e-12 * d.max():
             return False
         self.lu = lu
-        e = np.zeros(len(P))
-        e[-1] = 1.0
-        self.lamP = sla.lu_solve(lu, e, check_finite=False)
-        self.sigma = -(self.HF[:, P] @ self.lamP)  # slacks of the rows J
-        self.sigma[Tl] = 0.0
+        self.sP = sla.lu_solve(lu, np.r_[self.rJ[Tl], self.tau], check_finite=False)
+        self.sJ = self.rJ - self.f.KF[:, P] @ self.sP  # slacks of the rows J
+        self.sJ[Tl] = 0.0
         return True
 
     @property
@@ -168,18 +163,15 @@ class BarycentricWalk:
 
     @property
     def s(self):
-        """Slacks of all ``R`` rows at the current vertex (``v`` units; for choosing targets):
-        row ``a`` of ``B`` has ``-(lam2 - t) sigma_a lambda_a``."""
-        out = np.empty(self.R)
-        out[self.f.J] = self.sigma
-        lam = np.zeros(len(self.f.B))
-        lam[self.P] = self.lamP
-        out[self.f.B] = self.gap * lam
+        """Slacks of all ``R`` rows at the current vertex (for choosing targets)."""
+        out = np.zeros(self.R)
+        out[self.f.J] = self.sJ
+        out[self.f.B[self.P]] = self.sP
         return out
 
     def _vertex(self):
-        """The current vertex in ``v``: ``x* + (lam2 - t) D_P lambda_P``."""
-        return self.f.x2 + self.scale * (self.f.D[:, self.P] @ self.lamP)
+        """The current vertex in ``v``: ``x* - E_P sigma_P``."""
+        return self.f.x2 - self.f.E[:, self.P] @ self.sP
 
     def _flush(self) -> bool:
         """Check the buffered vertices in ``v`` (one product ``G X``); their tight rows join
@@ -207,9 +199,9 @@ class BarycentricWalk:
         if self.covered[k]:
             return True
         kl = int(self.f.loc[k])
-        if kl < 0:  # a row of B: tight wherever lambda_k = 0
+        if kl < 0:  # a row of B: tight wherever sigma_k = 0
             return None
-        g = self.H[kl]
+        g = self.f.K[kl]  # max G_k v = max K_k . sigma (+ const)
         res = None
         for _ in range(cap + 1):
             step = self._pivot(g, kl)
@@ -226,23 +218,21 @@ class BarycentricWalk:
             return None
         if self.covered[k]:
             return True
-        if res is False and self.sigma[kl] > 1e-9 * (1.0 + abs(self.b[k])):
+        if res is False and self.sJ[kl] > 1e-9 * (1.0 + abs(self.b[k])):
             return False
         return None
 
     def _pivot(self, g, kl):
-        """One primal simplex pivot for ``max g . lambda``: ``"optimal"``, ``"moved"`` or
+        """One primal simplex pivot for ``max g . sigma``: ``"optimal"``, ``"moved"`` or
         ``None`` (singular basis, unbounded, too many tight rows)."""
         P, Tl = self.P, self.Tl
         z = sla.lu_solve(self.lu, g[P], trans=1, check_finite=False)
         u, w = z[:-1], z[-1]
-        rc = g - w
+        # reduced costs per unit of slack (Dantzig pricing as in the walk in v)
+        rc = g - w * self.f.y
         if Tl:
-            rc -= u @ self.H[Tl]
+            rc -= u @ self.f.K[Tl]
         rc[P] = 0.0
-        # Dantzig pricing on the multipliers of the rows as in v (the walk of FacetWalk):
-        # a unit of lambda_a is a slack gap_a of row a of B
-        rc /= self.gap
         scale = max(float(np.abs(rc).max()), float(np.abs(u).max(initial=0.0)), 1e-300)
         e = int(np.argmax(rc))
         best = rc[e]
@@ -254,24 +244,24 @@ class BarycentricWalk:
         rhs = np.zeros(len(P))
         if e >= 0:
             if Tl:
-                rhs[:-1] = self.H[Tl, e]
-            rhs[-1] = 1.0
+                rhs[:-1] = self.f.K[Tl, e]
+            rhs[-1] = self.f.y[e]
             dP = -sla.lu_solve(self.lu, rhs, check_finite=False)
-            dS = -(self.HF[:, P] @ dP + self.HF[:, e])
+            dS = -(self.f.KF[:, P] @ dP + self.f.KF[:, e])
         else:
             rhs[j] = -1.0
             dP = sla.lu_solve(self.lu, rhs, check_finite=False)
-            dS = -(self.HF[:, P] @ dP)
+            dS = -(self.f.KF[:, P] @ dP)
         dS[Tl] = 0.0
         if e < 0:
             dS[Tl[j]] = 1.0
-        # ratio test: basic lambdas and the slacks of the rows not tight
+        # ratio test: the basic coordinates and the slacks of the rows not tight
         tl = PIV_TOL * max(1.0, float(np.abs(dP).max()))
         ts = PIV_TOL * max(1.0, float(np.abs(dS).max()))
         bl = dP < -tl
         bs = dS < -ts
-        rl = np.where(bl, np.maximum(self.lamP, 0.0) / np.where(bl, -dP, 1.0), np.inf)
-        rs = np.where(bs, np.maximum(self.sigma, 0.0) / np.where(bs, -dS, 1.0), np.inf)
+        rl = np.where(bl, np.maximum(self.sP, 0.0) / np.where(bl, -dP, 1.0), np.inf)
+        rs = np.where(bs, np.maximum(self.sJ, 0.0) / np.where(bs, -dS, 1.0), np.inf)
         tmin = min(rl.min(initial=np.inf), rs.min(initial=np.inf))
         if not np.isfinite(tmin):
             return None
@@ -283,11 +273,11 @@ class BarycentricWalk:
             cl = np.where(rl <= near, -dP, -np.inf)
             cs = np.where(rs <= near, -dS, -np.inf)
             il, is_ = int(np.argmax(cl)), int(np.argmax(cs))
-            leave = ("lam", il) if cl[il] >= cs[is_] else ("row", is_)
+            leave = ("coord", il) if cl[il] >= cs[is_] else ("row", is_)
         # update the sets (|P| = |T| + 1 is kept by each of the four cases); on copies, kept
         # only if the new basis factors (else the walker stays at its last vertex, broken)
         P, Tl = list(P), list(Tl)
-        if leave[0] == "lam":
+        if leave[0] == "coord":
             P.remove(P[leave[1]])
             if e >= 0:
                 P.append(e)

@@ -51,41 +51,41 @@ def _face_nonempty(G, b, k):
 
 
 @pytest.mark.parametrize("n,seed", [(12, 0), (30, 1)])
-def test_simplex_vertices_and_rows(n, seed):
-    """``V_a(t)``: every row of ``B`` tight except row ``a`` (slack ``gap_a``); ``h(t)`` is
-    ``G_J V(t) - b_J(t)`` computed directly."""
+def test_coordinates_are_the_slacks_of_the_basis_rows(n, seed):
+    """``v = x* - E sigma``, ``lam = lam2 - y . sigma`` give the basis rows the slacks
+    ``sigma``, and the other rows ``G_J v - b_J(lam) = K sigma - r(lam)``; ``y`` are the optimal
+    multipliers (``y >= 0``, ``G_B^T y = 0``, ``-m_B . y = 1``); with ``y > 0`` the vertices
+    ``sigma = (lam2 - t) e_a / y_a`` are those of the simplex of the basis rows at ``t``."""
     G, c, m, B, x2, lam2 = _problem(n, seed)
     f = SimplexFrame.of(G, c, m, B, x2, lam2)
     assert f is not None
+    assert f.y.min() >= -1e-12 and np.abs(G[B].T @ f.y).max() <= 1e-9
+    assert -m[B] @ f.y == pytest.approx(1.0, rel=1e-9)
+    rng = np.random.default_rng(seed)
+    for _ in range(3):
+        sig = rng.random(n + 1)
+        v, lam = x2 - f.E @ sig, lam2 - f.y @ sig
+        np.testing.assert_allclose(c[B] + lam * m[B] - G[B] @ v, sig, atol=1e-9)
+        np.testing.assert_allclose(G[f.J] @ v - c[f.J] - lam * m[f.J], f.K @ sig - f.r(lam),
+                                   atol=1e-9)
     t = 0.7 * lam2
     b = c + t * m
-    V = x2[:, None] + (lam2 - t) * f.D
     for a in range(n + 1):
+        v = x2 - f.E[:, a] * (lam2 - t) / f.y[a]
         rows = np.delete(B, a)
-        np.testing.assert_allclose(V[:, a], np.linalg.solve(G[rows], b[rows]), atol=1e-9)
-    S = G[B] @ V - b[B][:, None]
-    assert np.all(np.diag(S) < 0)
-    np.testing.assert_allclose(np.diag(S), (lam2 - t) * f.sigma, rtol=1e-9)
-    np.testing.assert_allclose(f.h(t), G[f.J] @ V - b[f.J][:, None], atol=1e-9)
+        np.testing.assert_allclose(v, np.linalg.solve(G[rows], b[rows]), atol=1e-9)
 
 
-def test_frame_refuses_what_is_not_a_simplex():
+def test_frame_refuses_what_is_not_a_basis():
     n = 12
     G, c, m, B, x2, lam2 = _problem(n, 0)
     R = len(c)
     assert SimplexFrame.of(G, c, m, np.r_[B[:-1], R], x2, lam2) is None  # the lam >= 0 row
     assert SimplexFrame.of(G, c, m, B[:-1], x2, lam2) is None  # too few rows
     assert SimplexFrame.of(G, c, m, np.r_[B[:-1], B[0]], x2, lam2) is None  # a repeated row
-    rng = np.random.default_rng(0)
-    refused = 0
-    for _ in range(20):  # random row sets: multipliers of both signs, no bounded simplex
-        S = rng.choice(R, n + 1, replace=False)
-        Q = np.hstack([G[S], m[S, None]])
-        y = -np.linalg.inv(Q)[n]
-        if y.min() < 0:
-            assert SimplexFrame.of(G, c, m, S, x2, lam2) is None
-            refused += 1
-    assert refused
+    G2, c2, m2 = np.vstack([G, G[B[0]]]), np.r_[c, c[B[0]]], np.r_[m, m[B[0]]]
+    assert SimplexFrame.of(G2, c2, m2, np.r_[B[:-1], R], x2, lam2) is None  # singular Q
+    assert SimplexFrame.of(G2, c2, m2, B, x2, lam2) is not None
 
 
 @pytest.mark.parametrize("n,seed,frac", [(12, 0, 0.5), (30, 1, 0.9), (30, 2, 0.99)])
@@ -131,15 +131,17 @@ def test_wrong_barycentric_data_is_never_certified():
     good = BarycentricWalk(f, t, T)
     assert good.ok
     bad = SimplexFrame.of(G, c, m, B, x2, lam2)
-    bad.D = bad.D * (1 + 1e-3)
+    bad.E = bad.E * (1 + 1e-3)
     assert not BarycentricWalk(bad, t, T).ok
     empty = [int(k) for k in f.J if not _face_nonempty(G, b, k)]
     assert empty
-    w = BarycentricWalk(f, t, T)
+    bad = SimplexFrame.of(G, c, m, B, x2, lam2)
+    w = BarycentricWalk(bad, t, T)
+    assert w.ok
     for k in empty:
-        kl = f.loc[k]
-        w.H[kl] += 10 * np.abs(w.H).max()  # the walk now sees row k cut every vertex
-        w.HF = np.asfortranarray(w.H)
+        kl = bad.loc[k]
+        bad.K[kl] = -bad.K[kl]  # the walk now sees a wrong row k
+        bad.KF = np.asfortranarray(bad.K)
         assert w.walk_to(k, 500) is not True
         assert not w.covered[k]
 
