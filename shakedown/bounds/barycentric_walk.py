@@ -38,13 +38,15 @@ import warnings
 import numpy as np
 import scipy.linalg as sla
 
+from . import inverse_updates as iu
 from .facet_walk import FacetWalk, certified_rows
 
-#: Most rows outside the simplex basis that may be tight at a vertex (and at most
-#: ``max(N / 3, 32)``):
-#: the basis of the walk is refactorised at each pivot, ``O(m^3)``; beyond it the walk stops
-#: (``broken``) and the pruning goes on in ``v`` from the same vertex.
-MAX_TIGHT = 400
+#: Most rows outside the ``lam2`` basis that may be tight at a vertex of a walk (beyond it the
+#: walk stops, ``broken``, and the pruning goes on in ``v`` from the same vertex).  No limit by
+#: default: a pivot costs ``O(N m + m^2)``, at most that of the walk in ``v``.
+MAX_TIGHT = 1 << 30
+#: Pivots between two recomputations of the working basis's inverse from scratch.
+REFACTOR = 50
 #: Vertices checked together (one product ``G X``).
 CHECK_BATCH = 16
 #: Relative tolerance of the reduced costs and of the ratio test's pivot elements.
@@ -63,6 +65,7 @@ class SimplexFrame:
         self.R, self.n = G.shape
         self.B = np.asarray(B, int)
         self.x2, self.lam2, self.E, self.y = x2, float(lam2), E, y
+        self.ET = np.ascontiguousarray(E.T)  # rows: the columns of E (gathered by P)
         self.J = np.flatnonzero(np.isin(np.arange(self.R), self.B, invert=True))
         self.loc = np.full(self.R, -1)  # row -> position in J (or -1)
         self.loc[self.J] = np.arange(len(self.J))
@@ -95,7 +98,14 @@ class SimplexFrame:
 
 
 class BarycentricWalk:
-    """Primal simplex walker on ``H(t)`` in barycentric coordinates (module docstring).
+    """Primal simplex walker on ``H(t)`` in the coordinates of the ``lam2`` basis (module
+    docstring).
+
+    The working basis ``M`` (rows: ``y_P`` and ``K_{T,P}``; columns: the basic coordinates
+    ``P``) is kept as an explicit inverse, updated in ``O(m^2)`` per pivot (a column or a row
+    replaced, or both added, or both removed) and recomputed from scratch every
+    :data:`REFACTOR` pivots; the columns ``K_{J,P}`` and rows ``K_{T,J}`` the pivots multiply
+    with are kept contiguous.
 
     Parameters
     ----------
@@ -111,7 +121,7 @@ class BarycentricWalk:
         self.G, self.b = frame.G, frame.c + self.t * frame.m
         self.R, self.n = frame.G.shape
         self.covered = np.zeros(self.R, bool)
-        self.limit = min(MAX_TIGHT, max(self.n // 3, 32))
+        self.limit = min(MAX_TIGHT, self.n)
         self.pivots = 0
         self.broken = False
         self.ok = False
@@ -125,8 +135,12 @@ class BarycentricWalk:
         inT[T] = True
         self.P = [int(a) for a in np.flatnonzero(~inT[frame.B])]  # basis rows left slack
         self.Tl = [int(frame.loc[j]) for j in T if frame.loc[j] >= 0]
-        if (len(self.P) != len(self.Tl) + 1 or len(self.Tl) > self.limit
-                or not self._factor()):
+        if len(self.P) != len(self.Tl) + 1 or len(self.Tl) > self.limit:
+            return
+        nJ, cap = len(frame.J), self.limit + 2
+        self.KP = np.empty((nJ, cap), order="F")  # K[:, P] in its first |P| columns
+        self.KT = np.empty((cap, frame.K.shape[1]))  # K[Tl, :] in its first |Tl| rows
+        if not self._refactor():
             return
         if (self.sP.min() < -1e-9 * max(1.0, float(np.abs(self.sP).max()))
                 or self.sJ.min() < -1e-9 * (1.0 + float(np.abs(self.rJ).max()))):
@@ -135,23 +149,31 @@ class BarycentricWalk:
         self.ok = self._flush()
 
     # ------------------------------------------------------------------ state
-    def _factor(self) -> bool:
-        """Factor the working basis ``[K_{T,P}; y_P]`` and recompute the vertex from it."""
-        P, Tl = self.P, self.Tl
-        M = np.empty((len(P), len(P)))
-        M[:-1] = self.f.K[np.ix_(Tl, P)]
-        M[-1] = self.f.y[P]
+    def _refactor(self) -> bool:
+        """The working basis from scratch: its inverse, the kept columns and rows, the vertex."""
+        P, Tl, K = self.P, self.Tl, self.f.K
+        m = len(P)
+        M = np.empty((m, m))
+        M[0] = self.f.y[P]
+        M[1:] = K[np.ix_(Tl, P)]
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", sla.LinAlgWarning)
             lu = sla.lu_factor(M, check_finite=False)
         d = np.abs(np.diag(lu[0]))
         if not d.min() > 1e-12 * d.max():
             return False
-        self.lu = lu
-        self.sP = sla.lu_solve(lu, np.r_[self.rJ[Tl], self.tau], check_finite=False)
-        self.sJ = self.rJ - self.f.KF[:, P] @ self.sP  # slacks of the rows J
-        self.sJ[Tl] = 0.0
+        self.W = np.ascontiguousarray(sla.lu_solve(lu, np.eye(m), check_finite=False))
+        self.KP[:, :m] = self.f.KF[:, P]
+        self.KT[: m - 1] = K[Tl]
+        self.since = 0
+        self._vertex_from_basis()
         return True
+
+    def _vertex_from_basis(self):
+        m = len(self.P)
+        self.sP = self.W @ np.r_[self.tau, self.rJ[self.Tl]]
+        self.sJ = self.rJ - self.KP[:, :m] @ self.sP  # slacks of the rows J
+        self.sJ[self.Tl] = 0.0
 
     @property
     def T(self):
@@ -171,7 +193,7 @@ class BarycentricWalk:
 
     def _vertex(self):
         """The current vertex in ``v``: ``x* - E_P sigma_P``."""
-        return self.f.x2 - self.f.E[:, self.P] @ self.sP
+        return self.f.x2 - self.sP @ self.f.ET[self.P]
 
     def _flush(self) -> bool:
         """Check the buffered vertices in ``v`` (one product ``G X``); their tight rows join
@@ -224,14 +246,15 @@ class BarycentricWalk:
 
     def _pivot(self, g, kl):
         """One primal simplex pivot for ``max g . sigma``: ``"optimal"``, ``"moved"`` or
-        ``None`` (singular basis, unbounded, too many tight rows)."""
-        P, Tl = self.P, self.Tl
-        z = sla.lu_solve(self.lu, g[P], trans=1, check_finite=False)
-        u, w = z[:-1], z[-1]
+        ``None`` (unbounded, a vanishing pivot element, too many tight rows)."""
+        P, Tl, W = self.P, self.Tl, self.W
+        m = len(P)
+        z = W.T @ g[P]
+        w, u = z[0], z[1:]
         # reduced costs per unit of slack (Dantzig pricing as in the walk in v)
         rc = g - w * self.f.y
         if Tl:
-            rc -= u @ self.f.K[Tl]
+            rc -= u @ self.KT[: m - 1]
         rc[P] = 0.0
         scale = max(float(np.abs(rc).max()), float(np.abs(u).max(initial=0.0)), 1e-300)
         e = int(np.argmax(rc))
@@ -241,17 +264,13 @@ class BarycentricWalk:
             best, e = -u[j], -1
         if not best > PIV_TOL * scale:
             return "optimal"
-        rhs = np.zeros(len(P))
         if e >= 0:
-            if Tl:
-                rhs[:-1] = self.f.K[Tl, e]
-            rhs[-1] = self.f.y[e]
-            dP = -sla.lu_solve(self.lu, rhs, check_finite=False)
-            dS = -(self.f.KF[:, P] @ dP + self.f.KF[:, e])
+            col = np.r_[self.f.y[e], self.KT[: m - 1, e]]
+            dP = -(W @ col)
+            dS = -(self.KP[:, :m] @ dP + self.f.KF[:, e])
         else:
-            rhs[j] = -1.0
-            dP = sla.lu_solve(self.lu, rhs, check_finite=False)
-            dS = -(self.f.KF[:, P] @ dP)
+            dP = -W[:, 1 + j]
+            dS = -(self.KP[:, :m] @ dP)
         dS[Tl] = 0.0
         if e < 0:
             dS[Tl[j]] = 1.0
@@ -268,43 +287,65 @@ class BarycentricWalk:
         near = tmin + 1e-12 * (1.0 + tmin)
         # prefer the target's row among ties, then the largest pivot element
         if bs[kl] and rs[kl] <= near:
-            leave = ("row", kl)
+            kind, q = "row", kl
         else:
             cl = np.where(rl <= near, -dP, -np.inf)
             cs = np.where(rs <= near, -dS, -np.inf)
             il, is_ = int(np.argmax(cl)), int(np.argmax(cs))
-            leave = ("coord", il) if cl[il] >= cs[is_] else ("row", is_)
-        # update the sets (|P| = |T| + 1 is kept by each of the four cases); on copies, kept
-        # only if the new basis factors (else the walker stays at its last vertex, broken)
-        P, Tl = list(P), list(Tl)
-        if leave[0] == "coord":
-            P.remove(P[leave[1]])
-            if e >= 0:
-                P.append(e)
-            else:
-                Tl.pop(j)
-        else:
-            if e >= 0:
-                P.append(e)
-                Tl.append(leave[1])
-            else:
-                Tl[j] = leave[1]
-        if len(Tl) > self.limit:
+            kind, q = ("coord", il) if cl[il] >= cs[is_] else ("row", is_)
+        if kind == "row" and len(Tl) + (e >= 0) > self.limit:
             return None
-        old = self.P, self.Tl
-        self.P, self.Tl = P, Tl
-        if not self._factor():
-            self.P, self.Tl = old
-            self._factor()
-            return None
+        self._update(kind, q, e, j, dP, dS, float(tmin))
         self.pivots += 1
-        if e >= 0 or leave[0] == "row":
-            newly = [r for r in Tl if not self.covered[self.f.J[r]]]
-            if newly:
+        self.since += 1
+        if self.since >= REFACTOR and not self._refactor():
+            return None
+        if e >= 0 or kind == "row":
+            if any(not self.covered[self.f.J[r]] for r in self.Tl):
                 self._buffer.append(self._vertex())
                 if len(self._buffer) >= CHECK_BATCH and not self._flush():
                     return None
         return "moved"
+
+    def _update(self, kind, q, e, j, dP, dS, step):
+        """Move to the adjacent vertex: coordinate ``e`` (or the slack of tight row ``Tl[j]``,
+        ``e < 0``) enters; coordinate ``P[q]`` (``kind="coord"``) or the slack of row ``q`` of
+        ``J`` (``kind="row"``) leaves.  ``O(m^2)`` on the inverse ``W`` of the working basis;
+        ``-dP`` is ``W`` times the entering column, ``dS`` its effect on the slacks, ``step``
+        the entering variable's new value (the vertex is updated, not recomputed)."""
+        P, Tl, W, K = self.P, self.Tl, self.W, self.f.K
+        m = len(P)
+        self.sP = self.sP + step * dP
+        self.sJ += step * dS
+        if kind == "row":
+            self.sJ[q] = 0.0
+        else:
+            self.sP[q] = 0.0
+        if kind == "coord" and e >= 0:  # column q of M replaced by column e
+            self.W = iu.replace_column(W, q, -dP)
+            P[q] = e
+            self.sP[q] = step
+            self.KP[:, q] = self.f.KF[:, e]
+        elif kind == "coord":  # column q and row 1 + j of M removed (the last ones move in)
+            self.W = iu.remove(W, q, 1 + j)
+            P[q], Tl[j] = P[m - 1], Tl[m - 2]
+            self.sP[q] = self.sP[m - 1]
+            self.sP = self.sP[:-1]
+            self.KP[:, q] = self.KP[:, m - 1]
+            self.KT[j] = self.KT[m - 2]
+            P.pop()
+            Tl.pop()
+        elif e >= 0:  # column e and row q added; schur = K[q, e] - K[q, P] W col_e = -dS[q]
+            self.W = iu.border(W, -dP, K[q, P] @ W, -dS[q])
+            P.append(e)
+            Tl.append(q)
+            self.KP[:, m] = self.f.KF[:, e]
+            self.KT[m - 1] = K[q]
+            self.sP = np.r_[self.sP, step]
+        else:  # row 1 + j of M replaced by row q of K; 1 + delta . W e_r = dS[q]
+            self.W = iu.replace_row(W, 1 + j, (K[q, P] - self.KT[j, P]) @ W, dS[q])
+            Tl[j] = q
+            self.KT[j] = K[q]
 
     def facet_walk(self):
         """A :class:`~.facet_walk.FacetWalk` at the current vertex (``None`` if not usable)."""

@@ -41,6 +41,7 @@ import numpy as np
 
 from . import dense_lp
 from .barycentric_walk import BarycentricWalk, SimplexFrame
+from .basis_lp import BasisLP
 from .facet_walk import FacetWalk, certified_rows, vertex_rows
 from .outcome import value
 from .single_simplex import single_dual_simplex
@@ -90,6 +91,7 @@ class _Pruner:
         self.take(None, main, lam2_answer=True)
         self.main = main
         self.frame = False  # the lam2 simplex (SimplexFrame), built on first use
+        self.lp = None  # its exact LPs (BasisLP)
 
     # ---------------------------------------------------------------- answers
     def take(self, k, ans, lam2_answer=False, cap=None):
@@ -120,9 +122,27 @@ class _Pruner:
             self.best = (val, k if k is not None else int(T[0]), ans)
         return True
 
+    def basis_lps(self, rows):
+        """Exact "max lam" LPs in the coordinates of the lam2 basis (:mod:`.basis_lp`); returns
+        the rows it could not decide (no frame, or an answer not certified)."""
+        if not self.simplex():
+            return [int(k) for k in rows]
+        if self.lp is None:
+            self.lp = BasisLP(self.frame, self.tab)
+        left = []
+        for k in rows:
+            k = int(k)
+            if self.exact[k]:
+                continue
+            ans = self.lp.solve(k)
+            if ans is None or not self.take(k, ans):
+                left.append(k)
+        return left
+
     def exact_lps(self, rows):
-        """Exact "max lam" LPs from the lam2 basis (HiGHS if not certified)."""
-        rows = [int(k) for k in rows]
+        """Exact "max lam" LPs: in the coordinates of the lam2 basis, else from the lam2 basis
+        in ``v`` (HiGHS if not certified)."""
+        rows = self.basis_lps(rows)
         failed = []
 
         def on_answer(g, ans):
@@ -186,20 +206,29 @@ class _Pruner:
         walk = self.fast_walk(val, T) or FacetWalk(self.G, self.c + val * self.m, T)
         return walk if walk.ok else None
 
-    def fast_walk(self, t, T):
-        """A walk in barycentric coordinates of the lam2 simplex from the vertex ``T`` of
-        ``H(t)`` (:mod:`.barycentric_walk`), or ``None`` where it does not apply."""
+    def simplex(self):
+        """The coordinates of the lam2 basis (:class:`.SimplexFrame`, built on first use), or
+        ``None`` where they do not apply."""
         if self.frame is False:
             B = np.asarray(self.main.basis, int)
             self.frame = SimplexFrame.of(self.G, self.c, self.m, B, self.main.x[: self.n],
                                          self.lam2)
-        if self.frame is None or not t < self.lam2:
+        return self.frame
+
+    def fast_walk(self, t, T):
+        """A walk in barycentric coordinates of the lam2 simplex from the vertex ``T`` of
+        ``H(t)`` (:mod:`.barycentric_walk`), or ``None`` where it does not apply."""
+        if not self.simplex() or not 0.0 <= t < self.lam2:
             return None
         walk = BarycentricWalk(self.frame, t, T)
         return walk if walk.ok else None
 
     def capped_lps(self, walk, t, rows):
-        """``max lam`` with row ``k`` tight and ``lam <= t`` from the walk's vertex."""
+        """``max lam`` with row ``k`` tight: exactly in the coordinates of the lam2 basis where
+        it applies, else with ``lam <= t`` from the walk's vertex."""
+        rows = self.basis_lps(rows)
+        if not rows:
+            return []
         A = np.vstack([self.A, np.r_[np.zeros(self.n), 1.0][None, :]])
         b = np.r_[self.b, t]
         e = np.r_[np.zeros(self.n), 1.0]

@@ -131,7 +131,7 @@ def test_wrong_barycentric_data_is_never_certified():
     good = BarycentricWalk(f, t, T)
     assert good.ok
     bad = SimplexFrame.of(G, c, m, B, x2, lam2)
-    bad.E = bad.E * (1 + 1e-3)
+    bad.ET = bad.ET * (1 + 1e-3)  # the map back to v
     assert not BarycentricWalk(bad, t, T).ok
     empty = [int(k) for k in f.J if not _face_nonempty(G, b, k)]
     assert empty

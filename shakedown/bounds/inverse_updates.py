@@ -1,0 +1,58 @@
+"""``O(m^2)`` updates of an explicit inverse ``W = M^-1`` when ``M`` changes by one row or
+column, grows by one of each, or loses one of each (the working bases of the walks and LPs in
+the coordinates of the ``lam2`` basis, :mod:`.barycentric_walk`, :mod:`.basis_lp`).
+
+Rows of ``W`` go with the columns of ``M`` and columns of ``W`` with its rows.  Every function
+returns the new ``W`` (C-order; the argument may be overwritten) and takes the products it
+needs precomputed by the caller, who has them from the ratio test anyway.  The pivot elements
+are the ratio test's, bounded away from zero there; callers recompute ``W`` from scratch every
+so many updates to bound the drift.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg as sla
+
+
+def rank1(W, alpha, x, y):
+    """``W + alpha x y^T`` in place (BLAS ``dger`` on the transposed view of C-order ``W``)."""
+    if not W.flags.c_contiguous:
+        W = np.ascontiguousarray(W)
+    return sla.blas.dger(alpha, y, x, a=W.T, overwrite_a=True).T
+
+
+def replace_column(W, q, wc):
+    """Column ``q`` of ``M`` replaced by ``a``; ``wc = W a`` (``wc[q] != 0``)."""
+    piv = W[q] / wc[q]
+    W = rank1(W, -1.0, wc, piv)
+    W[q] = piv
+    return W
+
+
+def replace_row(W, r, dw, denom):
+    """Row ``r`` of ``M`` replaced: ``M' = M + e_r delta^T``; ``dw = delta^T W`` and
+    ``denom = 1 + dw[r]`` (``!= 0``)."""
+    return rank1(W, -1.0 / denom, W[:, r].copy(), dw)
+
+
+def border(W, wb, cw, schur):
+    """``M' = [[M, a], [c^T, d]]``; ``wb = W a``, ``cw = c^T W``, ``schur = d - c^T W a``."""
+    m = W.shape[0]
+    Wn = np.empty((m + 1, m + 1))
+    Wn[:m, :m] = rank1(W, 1.0 / schur, wb, cw)
+    Wn[:m, m] = -wb / schur
+    Wn[m, :m] = -cw / schur
+    Wn[m, m] = 1.0 / schur
+    return Wn
+
+
+def remove(W, q, r):
+    """Column ``q`` and row ``r`` of ``M`` removed (``W[q, r] != 0``).  The last column and
+    row of ``M`` take their places (swap with the last, then drop): the caller moves its labels
+    the same way."""
+    W = rank1(W, -1.0 / W[q, r], W[:, r].copy(), W[q].copy())
+    last = W.shape[0] - 1
+    W[[q, last]] = W[[last, q]]
+    W[:, [r, last]] = W[:, [last, r]]
+    return np.ascontiguousarray(W[:-1, :-1])

@@ -1,0 +1,130 @@
+"""Exact ``lam_high`` by the dual simplex in the coordinates of the ``lam2`` basis (issue 14).
+
+Checked against the dual simplex in ``v`` from the ``lam2`` basis (``single_dual_simplex``) and
+HiGHS (``linprog``) row by row, on random systems and a crack network; every answer's KKT
+residuals recomputed here from scratch; wrong data (a corrupted row of the coordinates, a pivot
+cap) must give an answer that the checks reject or a ``failed`` status; and inside the pruning
+it must be used and give the exact ``lam1``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.optimize import linprog
+from test_bounds import random_problem
+from test_pruning import _unscreened_network, assert_fast_matches_full
+from test_single_simplex import _kachanov, _lp
+
+import shakedown as sd
+from shakedown.bounds import pruning
+from shakedown.bounds.barycentric_walk import SimplexFrame
+from shakedown.bounds.basis_lp import BasisLP
+from shakedown.bounds.certificates import CERT_TOL, kkt_residuals
+from shakedown.bounds.facet_walk import certified_rows
+from shakedown.bounds.single_simplex import single_dual_simplex
+
+
+def _setup(system, load):
+    A, b, e, main, tab = _lp(system, load)
+    n = len(e) - 1
+    R = A.shape[0] - 1
+    G, c, m = A[:R, :n], b[:R], -A[:R, n]
+    gn = np.linalg.norm(G, axis=1)
+    f = SimplexFrame.of(G / gn[:, None], c / gn, m / gn, main.basis, main.x[:n], main.x[-1])
+    assert f is not None
+    return f, tab, main
+
+
+def _highs_lam_high(tab, k):
+    n = tab.n - 1
+    res = linprog(-tab.e, A_ub=tab.A, b_ub=tab.b, A_eq=tab.A[[k]], b_eq=tab.b[[k]],
+                  bounds=[(None, None)] * (n + 1), method="highs")
+    assert res.status == 0
+    return -res.fun
+
+
+@pytest.mark.parametrize("case", ["random12", "random40", "kachanov60"])
+def test_every_row_matches_the_lp_in_v_and_highs(case):
+    if case.startswith("random"):
+        system, load = random_problem(int(case[6:]), 1)
+    else:
+        system, load = _kachanov(60, 3)
+    f, tab, main = _setup(system, load)
+    lp = BasisLP(f, tab)
+    lam2 = main.x[-1]
+    checked = 0
+    for k in f.J:
+        ans = lp.solve(int(k))
+        assert ans.status == "optimal"
+        ref = single_dual_simplex(tab, (int(k),))
+        assert ref.status == "optimal"
+        assert ans.x[-1] == pytest.approx(ref.x[-1], rel=1e-9, abs=1e-12)
+        # its own certificate, recomputed: KKT of the LP in v, the point checked from scratch
+        res = kkt_residuals(tab.A, tab.b, tab.e, ans.x, ans.y, equal=(int(k),),
+                            rownorm=np.ones(tab.R))
+        assert max(res) <= 1e-9 and max(ans.residuals) <= 1e-9
+        tight = certified_rows(tab.A, tab.b, ans.x)
+        assert tight is not None and tight[k] and tight[ans.basis].all()
+        assert len(ans.basis) == tab.n and ans.x[-1] <= lam2 * (1 + 1e-12)
+        if checked < 6:
+            assert ans.x[-1] == pytest.approx(_highs_lam_high(tab, int(k)), rel=1e-7)
+            checked += 1
+    assert lp.solve(int(f.B[0])) is None  # a row of the lam2 basis: lam_high = lam2
+
+
+def test_wrong_coordinates_give_an_answer_the_checks_reject():
+    system, load = random_problem(30, 2)
+    f, tab, main = _setup(system, load)
+    good = BasisLP(f, tab)
+    bad_f = SimplexFrame.of(f.G, f.c, f.m, f.B, f.x2, f.lam2)
+    bad_f.K[:] *= 1.001  # every row of K slightly wrong
+    bad_f.KF = np.asfortranarray(bad_f.K)
+    bad = BasisLP(bad_f, tab)
+    rejected = 0
+    for k in f.J[:20]:
+        a, g = bad.solve(int(k)), good.solve(int(k))
+        assert max(g.residuals) <= 1e-9
+        if a.status != "optimal":
+            rejected += 1
+            continue
+        tight = certified_rows(tab.A, tab.b, a.x)
+        if max(a.residuals) > CERT_TOL or tight is None or not tight[k]:
+            rejected += 1
+        else:  # accepted by the checks: then it must be right
+            assert a.x[-1] == pytest.approx(g.x[-1], rel=1e-7)
+    assert rejected
+
+
+def test_pivot_cap_is_a_failure():
+    system, load = _kachanov(60, 3)
+    f, tab, main = _setup(system, load)
+    lp = BasisLP(f, tab)
+    k = max(f.J, key=lambda k: lp.solve(int(k)).iterations)
+    full = lp.solve(int(k))
+    assert full.iterations > 3
+    capped = lp.solve(int(k), max_pivots=full.iterations - 1)
+    assert capped.status == "failed" and capped.x is None
+
+
+def test_pruning_uses_it_and_falls_back_when_it_fails(monkeypatch):
+    """The pruning's exact LPs go through it (counted) with the exact lam1; with every answer
+    failing, the LPs in v take over and give the same lam1."""
+    model, load = _unscreened_network(monkeypatch)
+    calls = []
+    orig = BasisLP.solve
+
+    def solve(self, k, max_pivots=None):
+        calls.append(k)
+        return orig(self, k, max_pivots)
+
+    monkeypatch.setattr(BasisLP, "solve", solve)
+    fast, _ = assert_fast_matches_full(model.system, load)
+    assert calls
+    monkeypatch.setattr(BasisLP, "solve", lambda self, k, max_pivots=None:
+                        orig(self, k, max_pivots=0))
+    again = sd.shakedown_bounds(model.system, load)
+    assert again.lam1 == pytest.approx(fast.lam1, rel=1e-12)
+    monkeypatch.setattr(pruning._Pruner, "simplex", lambda self: None)
+    plain = sd.shakedown_bounds(model.system, load)
+    assert plain.lam1 == pytest.approx(fast.lam1, rel=1e-12)
