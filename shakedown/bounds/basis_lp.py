@@ -81,7 +81,9 @@ class BasisLP:
 
     def solve(self, k: int, max_pivots: int | None = None) -> DenseAnswer | None:
         """The answer for row ``k`` (``None`` for a row of the basis: ``lam_high = lam2``).
-        Status ``"failed"`` on a pivot cap, a vanishing pivot or an infeasible LP."""
+        Status ``"failed"`` on a pivot cap (then ``x[-1]`` is the dual bound ``lam2 - c .
+        sigma``, an upper bound of ``lam_high_k`` when no multiplier of the ``lam2`` basis was
+        clipped), a vanishing pivot or an infeasible LP (``x`` is ``None``)."""
         f = self.f
         kl = int(f.loc[k])
         if kl < 0:
@@ -114,8 +116,10 @@ class BasisLP:
                 if worst >= -self.tol:
                     return self._answer(k, P, T, W, sP, z, it)
                 kind, q, sgn = ("row", i, 1.0) if sJ[i] <= worst else ("coord", r, 1.0)
-            if it >= cap:
-                return self._failed(it)
+            if it >= cap:  # stopped: the dual bound ranks the row (screening)
+                lam_ub = f.lam2 - (float(c[P] @ sP) if m else 0.0)
+                return DenseAnswer("failed", np.r_[np.full(self.n, np.nan), lam_ub], None,
+                                   np.zeros(0, int), it, (np.inf,) * 4)
             # pivot row: effect of one unit of each nonbasic variable on the leaving one
             if kind == "row":
                 rowq = K[q, P] + mJ[q] * y[P]

@@ -127,8 +127,7 @@ class _Pruner:
         the rows it could not decide (no frame, or an answer not certified)."""
         if not self.simplex():
             return [int(k) for k in rows]
-        if self.lp is None:
-            self.lp = BasisLP(self.frame, self.tab)
+        self.lp = self.lp or BasisLP(self.frame, self.tab)
         left = []
         for k in rows:
             k = int(k)
@@ -183,9 +182,17 @@ class _Pruner:
                 if self.exact[k]:
                     ub[g] = np.inf  # known exactly (and an incumbent if smallest): done
 
-            dense_lp.batch_dual_simplex(self.tab, [(k,) for k in rows], max_pivots=piv,
-                                        on_answer=on_answer,
-                                        skip=lambda g, rows=rows: self.exact[rows[g]])
+            def skip(g, rows=rows):
+                return self.exact[rows[g]]
+
+            if self.simplex():
+                self.lp = self.lp or BasisLP(self.frame, self.tab)
+                for g, k in enumerate(rows):
+                    if not skip(g):
+                        on_answer(g, self.lp.solve(k, max_pivots=piv))
+            else:
+                dense_lp.batch_dual_simplex(self.tab, [(k,) for k in rows], max_pivots=piv,
+                                            on_answer=on_answer, skip=skip)
             rows = [rows[g] for g in np.argsort(ub, kind="stable")]
         rows = rows[:INIT_LPS + PRIORITY]
         rest = set(rows)

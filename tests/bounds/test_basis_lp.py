@@ -104,7 +104,11 @@ def test_pivot_cap_is_a_failure():
     full = lp.solve(int(k))
     assert full.iterations > 3
     capped = lp.solve(int(k), max_pivots=full.iterations - 1)
-    assert capped.status == "failed" and capped.x is None
+    assert capped.status == "failed" and capped.iterations == full.iterations - 1
+    # a stopped dual simplex bounds lam_high from above (all multipliers > 0 here), falling
+    assert capped.x[-1] >= full.x[-1] - 1e-12
+    bounds = [lp.solve(int(k), max_pivots=p).x[-1] for p in (1, 2, 3)]
+    assert bounds[0] >= bounds[1] >= bounds[2] >= full.x[-1] - 1e-12
 
 
 def test_pruning_uses_it_and_falls_back_when_it_fails(monkeypatch):
