@@ -92,6 +92,16 @@ class SimplexFrame:
             return None
         return cls(G, c, m, B, x2, lam2, Qi[:n], Qi[n])
 
+    @classmethod
+    def from_lp(cls, cs, main):
+        """From a (nondimensional) constraint set and the certified ``lam2`` answer of the LP
+        in ``(v, lam)`` (rows ``[G, -m]``, then ``-lam <= 0``); rows scaled to unit ``|G_i|``."""
+        gn = np.linalg.norm(cs.G, axis=1)
+        gn[gn == 0] = 1.0
+        n = cs.n_nodes
+        return cls.of(cs.G / gn[:, None], cs.c / gn, cs.m / gn, main.basis, main.x[:n],
+                      float(main.x[-1]))
+
     def r(self, t):
         """``r_j(t) = b_j(t) - G_j x*`` for the rows ``J`` outside the basis."""
         return self.c[self.J] + t * self.m[self.J] - self.GJx

@@ -30,7 +30,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from . import inverse_updates as iu
-from .certificates import DenseAnswer, kkt_residuals
+from .certificates import CERT_TOL, DenseAnswer, kkt_residuals
 
 #: Pivots between two recomputations of the working basis's inverse from scratch.
 REFACTOR = 50
@@ -49,24 +49,44 @@ class BasisLP:
     tab : :class:`~.dual_simplex.Tableau`
         The LP in ``v`` (rows ``[G, -m]`` and ``-lam <= 0``, unit norm): the answers are
         stated and certified on it.
+    extra : tuple, optional
+        ``(G_x, c_x, m_x, rows)``: more constraint rows ``G_x v <= c_x + lam m_x`` (rows
+        ``rows`` of ``tab``), which may be violated at the ``lam2`` vertex (the no-separation
+        rows, :func:`separation_lp`).
     """
 
-    def __init__(self, frame, tab):
+    def __init__(self, frame, tab, extra=None):
         self.f, self.tab = frame, tab
         f = frame
         self.n = f.n
-        self.star = np.maximum(f.r(f.lam2), 0.0)  # slacks at the lam2 vertex
-        self.mJ = f.m[f.J]
+        rows, K, mr = f.J, f.K, f.m[f.J]
+        star = np.maximum(f.r(f.lam2), 0.0)  # slacks at the lam2 vertex
+        ours = np.hstack([f.G[f.J], -mr[:, None]])
+        if extra is not None:  # more rows: (G_x, c_x, m_x, their rows in tab)
+            Gx, cx, mx, idx = extra
+            rows = np.r_[rows, np.asarray(idx, int)]
+            K = np.vstack([K, -(Gx @ f.E)])
+            mr = np.r_[mr, mx]
+            star = np.r_[star, cx + f.lam2 * mx - Gx @ f.x2]  # may be violated
+            ours = np.vstack([ours, np.hstack([Gx, -np.asarray(mx)[:, None]])])
+        self.rows, self.K, self.mJ, self.star = rows, K, mr, star
+        self.KF = f.KF if extra is None else np.asfortranarray(K)
+        self.loc = np.full(tab.R, -1)  # tab row -> position in rows (or -1)
+        self.loc[rows] = np.arange(len(rows))
         self.cost = np.maximum(f.y, 0.0)
-        # tab row = (unit-G row) * g; multipliers scale by 1 / g
-        self.g = np.linalg.norm(tab.A[: f.R, : f.n], axis=1)
+        self.clipped = bool(np.any(f.y < 0.0))
+        # each row of tab = (our row) * g: the multipliers scale by 1 / g
+        norm = np.linalg.norm
+        self.g = norm(tab.A[rows], axis=1) / np.maximum(norm(ours, axis=1), 1e-300)
+        self.gB = norm(tab.A[f.B], axis=1) / norm(np.hstack([f.G[f.B], -f.m[f.B, None]]),
+                                                  axis=1)
         cap = f.n + 2
-        self.KP = np.empty((len(f.J), cap), order="F")
+        self.KP = np.empty((len(rows), cap), order="F")
         self.KT = np.empty((cap, f.n + 1))
-        self.tol = FEAS_TOL * max(1.0, float(self.star.max(initial=0.0)))
+        self.tol = FEAS_TOL * max(1.0, float(np.abs(star).max(initial=0.0)))
 
     def _M(self, P, T):
-        return self.f.K[np.ix_(T, P)] + np.outer(self.mJ[T], self.f.y[P])
+        return self.K[np.ix_(T, P)] + np.outer(self.mJ[T], self.f.y[P])
 
     def _inverse(self, P, T):
         if not P:
@@ -79,16 +99,17 @@ class BasisLP:
             return None
         return np.ascontiguousarray(sla.lu_solve(lu, np.eye(len(P)), check_finite=False))
 
-    def solve(self, k: int, max_pivots: int | None = None) -> DenseAnswer | None:
-        """The answer for row ``k`` (``None`` for a row of the basis: ``lam_high = lam2``).
+    def solve(self, k: int | None, max_pivots: int | None = None) -> DenseAnswer | None:
+        """The answer for row ``k`` (``None`` for a row of the basis: ``lam_high = lam2``;
+        ``k=None``: ``max lam`` with no row held tight, for the extra rows of ``extra``).
         Status ``"failed"`` on a pivot cap (then ``x[-1]`` is the dual bound ``lam2 - c .
         sigma``, an upper bound of ``lam_high_k`` when no multiplier of the ``lam2`` basis was
         clipped), a vanishing pivot or an infeasible LP (``x`` is ``None``)."""
         f = self.f
-        kl = int(f.loc[k])
-        if kl < 0:
+        kl = -1 if k is None else int(self.loc[k])
+        if kl < 0 and k is not None:
             return None
-        y, c, mJ, K, KP, KT = f.y, self.cost, self.mJ, f.K, self.KP, self.KT
+        y, c, mJ, K, KP, KT = f.y, self.cost, self.mJ, self.K, self.KP, self.KT
         cap = max_pivots if max_pivots is not None else 4 * self.n + 100
         P, T = [], []
         W = np.zeros((0, 0))
@@ -107,14 +128,18 @@ class BasisLP:
             d = c + (z @ KT[:m] if m else 0.0) + y * float(mJ[T] @ z if m else 0.0)
             d[P] = 0.0
             # leaving variable: row k first, then the most infeasible
-            if kl not in T:  # its slack must come to 0
+            if kl >= 0 and kl not in T:  # its slack must come to 0
                 kind, q, sgn = "row", kl, (-1.0 if sJ[kl] > 0 else 1.0)
             else:
                 i = int(np.argmin(sJ))
                 r = int(np.argmin(sP)) if m else -1
                 worst = min(sJ[i], sP[r] if m else np.inf)
-                if worst >= -self.tol:
-                    return self._answer(k, P, T, W, sP, z, it)
+                if worst >= -self.tol:  # optimal (for the clipped costs: finish on y)
+                    if self.clipped:
+                        W, it = self._primal_finish(kl, P, T, W, it, cap)
+                        if W is None:
+                            return self._failed(it)
+                    return self._answer(k, P, T, W, it)
                 kind, q, sgn = ("row", i, 1.0) if sJ[i] <= worst else ("coord", r, 1.0)
             if it >= cap:  # stopped: the dual bound ranks the row (screening)
                 lam_ub = f.lam2 - (float(c[P] @ sP) if m else 0.0)
@@ -155,7 +180,7 @@ class BasisLP:
             it += 1
 
     def _update(self, W, P, T, kind, q, enter, rowq):
-        f, K, mJ, y = self.f, self.f.K, self.mJ, self.f.y
+        K, mJ, y = self.K, self.mJ, self.f.y
         KP, KT = self.KP, self.KT
         m = len(P)
         e = enter[1]
@@ -169,7 +194,7 @@ class BasisLP:
             W = iu.border(W, wb, cw, schur) if m else np.array([[1.0 / schur]])
             P.append(e)
             T.append(q)
-            KP[:, m] = f.KF[:, e]
+            KP[:, m] = self.KF[:, e]
             KT[m] = K[q]
         elif kind == "row":  # row q replaces tight row T[e]
             old = KT[e, P] + mJ[T[e]] * y[P]
@@ -181,7 +206,7 @@ class BasisLP:
             col = KT[:m, e] + mJ[T] * y[e]
             W = iu.replace_column(W, q, W @ col)
             P[q] = e
-            KP[:, q] = f.KF[:, e]
+            KP[:, q] = self.KF[:, e]
         else:  # coordinate P[q] leaves, tight row T[e] loosens: both removed
             W = iu.remove(W, q, e)
             P[q], T[e] = P[m - 1], T[m - 1]
@@ -194,7 +219,60 @@ class BasisLP:
     def _failed(self, it):
         return DenseAnswer("failed", None, None, np.zeros(0, int), it, (np.inf,) * 4)
 
-    def _answer(self, k, P, T, W, sP, z, it):
+    def _primal_finish(self, kl, P, T, W, it, cap):
+        """Primal simplex pivots on the true costs ``y`` from a primal feasible basis (optimal
+        for the clipped costs): entering, a coordinate or a tight row's slack (never row
+        ``kl``'s) of negative reduced cost.  Returns ``(W, pivots)``; ``W`` is ``None`` on a
+        cap or an unbounded direction."""
+        y, mJ, KP, KT = self.f.y, self.mJ, self.KP, self.KT
+        while True:
+            m = len(P)
+            z = -(W.T @ y[P]) if m else np.zeros(0)
+            d = y + (z @ KT[:m] if m else 0.0) + y * float(mJ[T] @ z if m else 0.0)
+            d[P] = 0.0
+            zs = z.copy()
+            if kl in T:
+                zs[T.index(kl)] = 0.0  # equality: its slack never enters
+            e = int(np.argmin(d))
+            j = int(np.argmin(zs)) if m else -1
+            scale = max(float(np.abs(d).max()), float(np.abs(z).max(initial=0.0)), 1e-300)
+            if min(d[e], zs[j] if m else np.inf) >= -PIV_TOL * scale:
+                return W, it
+            if it >= cap:
+                return None, it
+            sP = W @ self.star[T] if m else np.zeros(0)
+            sJ = self.star - (KP[:, :m] @ sP if m else 0.0) - mJ * float(y[P] @ sP)
+            sJ[T] = 0.0
+            if m and zs[j] < d[e]:  # loosen tight row T[j]
+                enter = ("slack", j)
+                dP = -W[:, j]
+                dS = -(KP[:, :m] @ dP + mJ * float(y[P] @ dP))
+                dS[T[j]] = 1.0
+            else:
+                enter = ("coord", e)
+                col = KT[:m, e] + mJ[T] * y[e] if m else np.zeros(0)
+                dP = -(W @ col) if m else np.zeros(0)
+                dS = -(KP[:, :m] @ dP + mJ * float(y[P] @ dP) + self.KF[:, e] + mJ * y[e])
+                dS[T] = 0.0
+            bl, bs = dP < -PIV_TOL, dS < -PIV_TOL
+            bs[T] = False
+            rl = np.where(bl, np.maximum(sP, 0.0) / np.where(bl, -dP, 1.0), np.inf)
+            rs = np.where(bs, np.maximum(sJ, 0.0) / np.where(bs, -dS, 1.0), np.inf)
+            il = int(np.argmin(rl)) if m else -1
+            is_ = int(np.argmin(rs))
+            if not min(rl[il] if m else np.inf, rs[is_]) < np.inf:
+                return None, it  # unbounded
+            if m and rl[il] <= rs[is_]:
+                kind, q, rowq = "coord", il, None
+            else:
+                kind, q = "row", is_
+                rowq = self.K[q, P] + mJ[q] * y[P]
+            W = self._update(W, P, T, kind, q, enter, rowq)
+            it += 1
+            if W is None:
+                return None, it
+
+    def _answer(self, k, P, T, W, it):
         """The optimum in ``v`` with its multipliers on the tableau's rows, certified there."""
         f, tab = self.f, self.tab
         W = self._inverse(P, T) if P else W  # fresh values for the answer
@@ -204,16 +282,52 @@ class BasisLP:
         v = f.x2 - sP @ f.ET[P] if P else f.x2.copy()
         lam = f.lam2 - (float(f.y[P] @ sP) if P else 0.0)
         z = -(W.T @ f.y[P]) if P else np.zeros(0)  # the true costs now
-        d = f.y + ((z @ f.K[T]) + f.y * float(self.mJ[T] @ z) if P else 0.0)
-        ypr = np.zeros(f.R)
+        d = f.y + ((z @ self.K[T]) + f.y * float(self.mJ[T] @ z) if P else 0.0)
         nb = np.ones(len(f.B), bool)
         nb[P] = False
-        ypr[f.B[nb]] = d[nb]
-        ypr[f.J[T]] = z
         Y = np.zeros(tab.R)
-        Y[: f.R] = ypr / self.g
+        Y[f.B[nb]] = d[nb] / self.gB[nb]
+        Y[self.rows[T]] = z / self.g[T]
         x = np.r_[v, lam]
-        res = kkt_residuals(tab.A, tab.b, tab.e, x, Y, equal=(k,),
+        res = kkt_residuals(tab.A, tab.b, tab.e, x, Y, equal=() if k is None else (k,),
                             rownorm=np.ones(tab.R))
-        basis = np.r_[f.B[nb], f.J[T]].astype(int)
+        basis = np.r_[f.B[nb], self.rows[T]].astype(int)
+        if max(res) > CERT_TOL:  # not certified: the caller solves it another way
+            return DenseAnswer("failed", x, Y, basis, it, (np.nan,) * 4)
         return DenseAnswer("optimal", x, Y, basis, it, res)
+
+
+def separation_lp(frame, cs):
+    """``max lam`` with the no-separation rows ``sep_G v <= sep_c + lam sep_m`` added (MODEL.md
+    s.3), by the dual simplex from the ``lam2`` vertex (where some of them are violated).
+
+    Returns ``(answer, tab)``: the :class:`~.certificates.DenseAnswer` (multipliers on the rows
+    of ``tab``: ``[G, -m]``, the separation rows, ``-lam <= 0``, unit norm; the caller checks
+    its residuals) -- or ``(None, None)`` if the separation rows are sparse.
+    """
+    import scipy.sparse as sp
+
+    if sp.issparse(cs.sep_G):
+        return None, None
+    n, R = cs.n_nodes, len(cs.c)
+    A = np.vstack([np.hstack([cs.G, -cs.m[:, None]]), np.hstack([cs.sep_G, -cs.sep_m[:, None]]),
+                   np.r_[np.zeros(n), -1.0][None, :]])
+    b = np.r_[cs.c, cs.sep_c, 0.0]
+    nrm = np.linalg.norm(A, axis=1)
+    nrm[nrm == 0] = 1.0
+    tab = _Rows(A / nrm[:, None], b / nrm, np.r_[np.zeros(n), 1.0])
+    gx = np.linalg.norm(cs.sep_G, axis=1)
+    gx[gx == 0] = 1.0
+    Gx = np.vstack([cs.sep_G / gx[:, None], np.zeros((1, n))])
+    cx = np.r_[cs.sep_c / gx, 0.0]
+    mx = np.r_[cs.sep_m / gx, 1.0]  # last: lam >= 0
+    lp = BasisLP(frame, tab, extra=(Gx, cx, mx, np.r_[R + np.arange(n), R + n]))
+    return lp.solve(None), tab
+
+
+class _Rows:
+    """The rows of an LP in ``v`` (unit norm) as :class:`BasisLP` reads them."""
+
+    def __init__(self, A, b, e):
+        self.A, self.b, self.e = A, b, e
+        self.R, self.n = A.shape

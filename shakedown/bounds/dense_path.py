@@ -18,9 +18,12 @@ from __future__ import annotations
 import numpy as np
 
 from . import dense_lp
+from .barycentric_walk import SimplexFrame
+from .basis_lp import separation_lp
 from .certificates import CERT_TOL
 from .constraints import ConstraintSet
 from .highs_path import RESIDUAL_NAMES, HighsModel
+from .lp import LPAnswer
 from .outcome import PathOutcome, lam1_from_intervals, separation_outcome, value
 from .pruning import lam_high_pruned
 from .result import LAM_RTOL
@@ -123,8 +126,10 @@ def solve_dense(cs: ConstraintSet, intervals: bool, adjacency: bool,
                       v_at_lam2=main.x[:n].copy(), certificate=main.y[: 2 * n].copy())
     lamrow = 2 * n
     tab0 = _min_start(A, b, e, tab, lamrow, book) if (intervals or adjacency) else None
+    frame = _Frame(cs, main)
     if intervals:
-        _intervals(cs, A, b, e, tab, tab0, main, book, out, exact_all=intervals == "all")
+        _intervals(cs, A, b, e, tab, tab0, main, book, out, exact_all=intervals == "all",
+                   frame=frame)
     if adjacency:
         pairs = [(j, n + j) for j in range(n)]
         if tab0 is not None:
@@ -144,12 +149,40 @@ def solve_dense(cs: ConstraintSet, intervals: bool, adjacency: bool,
             out.lam_sep = lam2  # the lam2 optimum already keeps every node in compression
         else:
             out.lam_sep, out.sep_nodes = separation_outcome(
-                book.highs("max", separation=True), lam2, n)
+                _separation(cs, frame, book), lam2, n)
     out.residuals, out.n_lps, out.iterations = book.worst, book.lps, book.iters
     return out
 
 
-def _intervals(cs, A, b, e, tab, tab0, main, book, out, exact_all):
+class _Frame:
+    """The coordinates of the ``lam2`` basis (:class:`.SimplexFrame`), built on first use and
+    shared by the pruning and the no-separation LP; ``get()`` is ``None`` where they do not
+    apply."""
+
+    def __init__(self, cs, main):
+        self.cs, self.main, self.frame = cs, main, False
+
+    def get(self):
+        if self.frame is False:
+            self.frame = SimplexFrame.from_lp(self.cs, self.main)
+        return self.frame
+
+
+def _separation(cs, frame, book):
+    """The no-separation LP: by the dual simplex in the coordinates of the ``lam2`` basis
+    (:func:`.separation_lp`) when its answer is certified, else by HiGHS."""
+    fr = frame.get()
+    if fr is not None:
+        ans, _ = separation_lp(fr, cs)
+        if ans is not None and ans.status == "optimal" and max(ans.residuals) <= CERT_TOL:
+            book.record(ans)
+            R = len(cs.c)
+            return LPAnswer("optimal", float(ans.x[-1]), ans.x, ans.y[: R + cs.n_nodes],
+                            np.zeros(len(ans.x)), *ans.residuals, ans.iterations)
+    return book.highs("max", separation=True)
+
+
+def _intervals(cs, A, b, e, tab, tab0, main, book, out, exact_all, frame):
     """Activity intervals and ``lam1``.  ``exact_all``: every ``lam_high`` exactly (one LP per
     row not shared); else ``lam_low`` first and, when every ``lam_low`` is 0, only what ``lam1``
     needs (:mod:`.pruning`: exact ``lam_high`` for some rows, proven lower bounds elsewhere)."""
@@ -163,7 +196,7 @@ def _intervals(cs, A, b, e, tab, tab0, main, book, out, exact_all):
         out.lam_low[:] = lo
         tol = LAM_RTOL * max(1.0, lam2)  # as lam1_from_intervals reads "active at 0"
         if np.all(lo <= tol):  # (False for nan: never active)
-            hi[:], out.hi_exact = lam_high_pruned(cs, A, b, tab, main, book)
+            hi[:], out.hi_exact = lam_high_pruned(cs, A, b, tab, main, book, frame.get())
             out.lam1, out.limiting = lam1_from_intervals(
                 cs.labels(), out.lam_low, np.where(out.hi_exact, hi, np.inf), lam2,
                 out.messages)

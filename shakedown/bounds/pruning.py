@@ -76,7 +76,7 @@ DESCENT_CAP = 400
 
 
 class _Pruner:
-    def __init__(self, cs, A, b, tab, main, book):
+    def __init__(self, cs, A, b, tab, main, book, frame=False):
         n = cs.n_nodes
         self.n, self.R = n, 2 * n
         self.A, self.b, self.tab, self.book = A, b, tab, book
@@ -89,8 +89,8 @@ class _Pruner:
         self.lower = np.full(self.R, -np.inf)
         self.best = None  # (value, row, answer) of the smallest exact lam_high with a basis
         self.take(None, main, lam2_answer=True)
-        self.main = main
-        self.frame = False  # the lam2 simplex (SimplexFrame), built on first use
+        self.main, self.cs = main, cs
+        self.frame = frame  # the coordinates of the lam2 basis (False: built on first use)
         self.lp = None  # its exact LPs (BasisLP)
 
     # ---------------------------------------------------------------- answers
@@ -217,9 +217,7 @@ class _Pruner:
         """The coordinates of the lam2 basis (:class:`.SimplexFrame`, built on first use), or
         ``None`` where they do not apply."""
         if self.frame is False:
-            B = np.asarray(self.main.basis, int)
-            self.frame = SimplexFrame.of(self.G, self.c, self.m, B, self.main.x[: self.n],
-                                         self.lam2)
+            self.frame = SimplexFrame.from_lp(self.cs, self.main)
         return self.frame
 
     def fast_walk(self, t, T):
@@ -344,13 +342,14 @@ def _solve(tab, rows, on_answer, skip, max_pivots=None, stop=None):
                                 on_answer=on_answer, skip=skip, stop=stop)
 
 
-def lam_high_pruned(cs, A, b, tab, main, book):
+def lam_high_pruned(cs, A, b, tab, main, book, frame=False):
     """Per row: the exact ``lam_high`` or a proven lower bound ``>= lam1`` (module docstring).
 
     Returns ``(lam_high, exact)`` (nondimensional; ``exact[k]`` says which).  Requires every
-    ``lam_low`` to be 0 (the caller checks first).
+    ``lam_low`` to be 0 (the caller checks first).  ``frame``: the coordinates of the lam2 basis
+    (:meth:`.SimplexFrame.from_lp`) if already built, ``None`` if they do not apply.
     """
-    p = _Pruner(cs, A, b, tab, main, book)
+    p = _Pruner(cs, A, b, tab, main, book, frame)
     p.run()
     hi = np.where(p.exact, p.hi, p.lower)
     return np.minimum(hi, p.lam2), p.exact.copy()
