@@ -50,13 +50,16 @@ def _primal_finish(A, b, e, tab, cap=None):
     return out if not out.singular and out.dual_feasible else None
 
 
-def solve_max(A, b, e, *, max_iter=80):
+def solve_max(A, b, e, *, max_iter=80, interior=False):
     """``max e.x s.t. A x <= b``: interior point, basis identification, dual simplex clean-up.
 
     Returns ``(answer, tableau)`` with the tableau of the optimal basis (for warm starts), or
     ``(None, None)`` when the interior point finds no usable iterate (unbounded or infeasible
     LP, or numerical trouble) or the crossover does not end certified: the caller then uses
-    HiGHS.
+    HiGHS.  ``interior=True``: where the crossover fails, ``(answer, None)`` with status
+    ``"interior"``: the interior point's best iterate ``x`` and multipliers ``y`` (row scale
+    of ``A``), not a vertex and not certified -- the caller checks what it needs (the
+    Chebyshev centre: :func:`~.engine.chebyshev_centre`).
     """
     R, n = A.shape
     rn = np.linalg.norm(A, axis=1)
@@ -65,6 +68,16 @@ def solve_max(A, b, e, *, max_iter=80):
     x, s, z, status, it = ipm(As, bs, e, max_iter=max_iter)
     if status == "failed":
         return None, None
+    ans, tab = _crossover(A, b, e, As, s, z, it)
+    if ans is None and interior:
+        ans = DenseAnswer("interior", x, z / rn, np.zeros(0, int), it, (np.nan,) * 4)
+    return ans, tab
+
+
+def _crossover(A, b, e, As, s, z, it):
+    """An optimal basis from the interior point's iterate, finished by the simplex and
+    certified (:func:`solve_max`); ``(None, None)`` if that fails."""
+    n = A.shape[1]
     T = identify_basis(As, z, s, n)
     tab = Tableau(A, b, e, T) if T is not None else None
     first = tab

@@ -229,7 +229,9 @@ def _chebyshev(cs: ConstraintSet, lam: float, solver: str):
     cap = 1e6 * max(1.0, np.abs(b).max(initial=0.0) / max(norms.min(initial=1.0), 1e-300))
     if solver == "auto":
         top = np.r_[np.zeros(n), 1.0]
-        ans, _ = dense_lp.solve_max(np.vstack([rows, top]), np.r_[b, cap], top)
+        ans, _ = dense_lp.solve_max(np.vstack([rows, top]), np.r_[b, cap], top, interior=True)
+        if ans is not None and ans.status == "interior":
+            ans = _interior_centre(cs.G, norms, b, cap, ans)
         if ans is not None:
             if ans.x[-1] < 0:
                 return np.zeros(0), -np.inf
@@ -247,6 +249,32 @@ def _chebyshev(cs: ConstraintSet, lam: float, solver: str):
         return np.zeros(0), -np.inf
     return ans.x[:n], float(ans.x[-1])
 
+
+def _interior_centre(G, norms, b, cap, ans):
+    """A Chebyshev centre from the interior point's iterate when the crossover fails (issue 14:
+    a 2000-crack network whose largest balls form a face, not a vertex; HiGHS took 358 s).
+
+    The centre ``v`` is the iterate's; its radius is recomputed from scratch,
+    ``r = min_i (b_i - G_i v) / |G_i|`` (the ball lies in ``H``).  Accepted only if the
+    multipliers ``y >= 0`` prove that no ball is larger by more than :data:`CENTRE_RTOL`:
+    ``r* <= b.y + cap y_cap`` (weak duality, with ``G^T y = 0`` and ``|G| . y + y_cap = 1`` to
+    the same tolerance).  Else ``None`` (HiGHS)."""
+    n = G.shape[1]
+    v, y = ans.x[:n], np.maximum(ans.y, 0.0)
+    r = float(np.min((b - G @ v) / norms))
+    yr, ycap = y[:-1], y[-1]
+    ys = max(float(np.abs(yr).max(initial=0.0)), 1e-300)
+    stat = max(float(np.abs(G.T @ yr).max()) / (ys * np.abs(G).max()),
+               abs(float(norms @ yr) + ycap - 1.0))
+    bound = float(b @ yr) + cap * ycap
+    if stat > CENTRE_RTOL or not bound - r <= CENTRE_RTOL * max(abs(r), 1e-300):
+        return None
+    return dense_lp.DenseAnswer("optimal", np.r_[v, r], ans.y, ans.basis, ans.iterations,
+                                (0.0, 0.0, stat, (bound - r) / max(abs(r), 1e-300)))
+
+
+#: Relative suboptimality of a Chebyshev radius accepted from the interior point.
+CENTRE_RTOL = 1e-7
 
 __all__ = [
     "ConstraintSet",

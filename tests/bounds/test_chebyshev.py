@@ -1,0 +1,67 @@
+"""The safe state: the Chebyshev centre of ``H(lam)`` (largest ball inside the safe region).
+
+When the crossover after the interior point fails (issue 14: on a 2000-crack network the largest
+balls form a face, not a vertex, and HiGHS then took 358 s) the interior point's iterate is
+accepted if its multipliers prove the radius optimal to ``CENTRE_RTOL``.  Checked against HiGHS
+(the ``"highs"`` solver) with the crossover forced to fail, and on wrong multipliers and a moved
+centre (both must be refused).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from test_bounds import random_problem
+
+import shakedown as sd
+from shakedown.bounds import dense_lp, engine
+
+
+def _ball_inside(cs, lam, v, r):
+    nrm = np.linalg.norm(cs.G, axis=1)
+    return np.all(cs.G @ v + r * nrm <= cs.offsets(lam) + 1e-9 * (1 + np.abs(cs.offsets(lam))))
+
+
+@pytest.mark.parametrize("n,seed", [(10, 0), (60, 1), (150, 2)])
+def test_interior_centre_when_the_crossover_fails(n, seed, monkeypatch):
+    system, load = random_problem(n, seed)
+    cs = sd.bounds.extreme_constraints(system, load)
+    lam2 = sd.shakedown_bounds(system, load, only=("lam2",)).lam2
+    for lam in (0.0, 0.5 * lam2, 0.95 * lam2):
+        v_h, r_h = sd.bounds.chebyshev_centre(cs, lam, solver="highs")
+        v_a, r_a = sd.bounds.chebyshev_centre(cs, lam)
+        assert r_a == pytest.approx(r_h, rel=1e-7)
+        with monkeypatch.context() as mp:
+            mp.setattr(dense_lp, "_crossover", lambda *a: (None, None))
+            highs = []
+
+            def no_highs(*a, highs=highs, orig=engine.ReusableLP, **k):
+                highs.append(1)
+                return orig(*a, **k)
+
+            mp.setattr(engine, "ReusableLP", no_highs)
+            v_i, r_i = sd.bounds.chebyshev_centre(cs, lam)
+        assert not highs  # the interior iterate was accepted
+        assert r_i == pytest.approx(r_h, rel=1e-7) and r_i <= r_h * (1 + 1e-9)
+        assert _ball_inside(cs, lam, v_i, r_i)
+
+
+def test_interior_centre_refuses_wrong_multipliers_and_a_moved_centre():
+    system, load = random_problem(40, 3)
+    cs = sd.bounds.extreme_constraints(system, load)
+    b = cs.offsets(0.0)
+    norms = np.linalg.norm(cs.G, axis=1)
+    rows = np.hstack([cs.G, norms[:, None]])
+    cap = 1e6 * max(1.0, np.abs(b).max() / norms.min())
+    top = np.r_[np.zeros(cs.n_nodes), 1.0]
+    A, bb = np.vstack([rows, top]), np.r_[b, cap]
+    rn = np.linalg.norm(A, axis=1)
+    x, s, z, status, it = dense_lp.ipm(A / rn[:, None], bb / rn, top)
+    ans = dense_lp.DenseAnswer("interior", x, z / rn, np.zeros(0, int), it, (np.nan,) * 4)
+    good = engine._interior_centre(cs.G, norms, b, cap, ans)
+    assert good is not None and max(good.residuals) <= engine.CENTRE_RTOL
+    scaled = dense_lp.DenseAnswer("interior", x, 0.5 * z / rn, ans.basis, it, ans.residuals)
+    assert engine._interior_centre(cs.G, norms, b, cap, scaled) is None
+    moved = dense_lp.DenseAnswer("interior", x + 1e-3 * np.r_[cs.G[0], 0.0], z / rn,
+                                 ans.basis, it, ans.residuals)
+    assert engine._interior_centre(cs.G, norms, b, cap, moved) is None
