@@ -33,6 +33,15 @@ Every optimum of step 1 and 3 also proves ``lam_high_j >= value`` for each row `
 it (checked by :func:`~.facet_walk.certified_rows`).  Result: per row either the exact
 ``lam_high`` or a proven lower bound that is ``>=`` the final ``lam1``; ``lam1`` = the smallest
 exact value.  Anything that cannot be certified falls back to exact LPs for the rows left.
+
+Where the ``lam2`` basis gives coordinates (:class:`~.barycentric_walk.SimplexFrame`: the
+slacks of its ``N + 1`` rows; almost always), the walks and the LPs work in them: the walk is a
+:class:`~.barycentric_walk.BarycentricWalk` and the LPs of steps 1 and 3 and of the screen are
+solved exactly, uncapped, by :class:`~.basis_lp.BasisLP` (a dual simplex from the ``lam2``
+vertex with an ``m x m`` working basis, ``m`` the rows tight outside the ``lam2`` basis: a pivot
+costs ``O(N m)`` instead of ``O(N^2)``).  Everything they find is checked in ``v`` as above; the
+walk in ``v`` and the LPs in ``v`` described above are the fallback (issue 14, N = 2000: the
+random system of ``test_n2000_finishes`` 595 s -> 44 s, a 2000-crack network 754 s -> 84 s).
 """
 
 from __future__ import annotations
@@ -65,6 +74,10 @@ SCREEN_ROUNDS = ((None, 10), (48, 40), (12, 160))
 #: one against 122 s pooled at 8176575), a lone long LP is faster alone (14 s against 18 s).
 SINGLE_MAX = 1
 SINGLE_MIN_N = 200
+#: Smallest problem whose screen runs its partial LPs one by one in the coordinates of the lam2
+#: basis (:mod:`.basis_lp`); below, the batched dual simplex in ``v`` is cheaper (N = 500:
+#: 0.63 s against 0.2 s for the 400 + 48 + 12 partial LPs).
+SCREEN_BASIS_MIN_N = 800
 #: Pivots a walk may spend on one target before it goes to an exact LP.
 WALK_CAP = 60
 #: Pivots a walk may go on with when the first ``WALK_CAP`` did not decide.
@@ -185,7 +198,7 @@ class _Pruner:
             def skip(g, rows=rows):
                 return self.exact[rows[g]]
 
-            if self.simplex():
+            if self.n >= SCREEN_BASIS_MIN_N and self.simplex():
                 self.lp = self.lp or BasisLP(self.frame, self.tab)
                 for g, k in enumerate(rows):
                     if not skip(g):

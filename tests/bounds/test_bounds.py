@@ -303,12 +303,18 @@ def test_kachanov_400_default_equals_exact_intervals():
     check_certificate(b)
 
 
-@pytest.mark.slow
 def test_n2000_finishes():
+    """N = 2000, dense (issue 14: 803 s, then 595 s; about 45 s with the LPs and walks in the
+    coordinates of the lam2 basis): every answer certified, the lam2 certificate (Farkas) and
+    the limiting row's exact lam_high checked here."""
     system, load = random_problem(2000, 0)
     b = shakedown_bounds(system, load, adjacency=False, separation=False)
     assert b.status == "bounded" and 0 < b.lam1 <= b.lam2
     assert max(b.residuals.values()) <= 1e-7
+    check_certificate(b)
+    k = b.limiting_constraint
+    assert b.lam_high_exact[k] and b.lam_high[k] == pytest.approx(b.lam1, rel=1e-12)
+    assert np.all(b.lam_high >= b.lam1 * (1 - 1e-9)) and np.all(b.lam_low <= 1e-9 * b.lam2)
 
 
 # ---------------------------------------------------------------------- bad input

@@ -27,7 +27,9 @@ SAME = 1e-9
 def init_lps(request, monkeypatch):
     """Run each test with many start LPs, with a single one (pruning does the rest), and with a
     single one chosen without the screening by partial dual simplex runs (the start is then
-    far from ``lam1`` and the walks, descents and capped LPs do most of the work)."""
+    far from ``lam1`` and the walks, descents and capped LPs do most of the work).  The screen
+    of "init1" runs in the coordinates of the lam2 basis, that of "init32" in ``v``."""
+    monkeypatch.setattr(pruning, "SCREEN_BASIS_MIN_N", 0 if request.param[0] == 1 else 10**9)
     monkeypatch.setattr(pruning, "INIT_LPS", request.param[0])
     monkeypatch.setattr(pruning, "UNSCREENED_LPS", request.param[0])
     monkeypatch.setattr(pruning, "SCREEN_ROWS", request.param[1])
