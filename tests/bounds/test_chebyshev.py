@@ -4,7 +4,8 @@ When the crossover after the interior point fails (issue 14: on a 2000-crack net
 balls form a face, not a vertex, and HiGHS then took 358 s) the interior point's iterate is
 accepted if its multipliers prove the radius optimal to ``CENTRE_RTOL``.  Checked against HiGHS
 (the ``"highs"`` solver) with the crossover forced to fail, and on wrong multipliers and a moved
-centre (both must be refused).
+centre (both must be refused).  Also the interior point's other hand-over to the crossover: a
+stalled iterate of a condensed FE interface (``ipm.APPROX_TOL``).
 """
 
 from __future__ import annotations
@@ -65,3 +66,35 @@ def test_interior_centre_refuses_wrong_multipliers_and_a_moved_centre():
     moved = dense_lp.DenseAnswer("interior", x + 1e-3 * np.r_[cs.G[0], 0.0], z / rn,
                                  ans.basis, it, ans.residuals)
     assert engine._interior_centre(cs.G, norms, b, cap, moved) is None
+
+
+def test_condensed_fe_strip_takes_the_dense_path(monkeypatch):
+    """A strip pressed on an obstacle and sheared cyclically, 500 contact nodes: its interior
+    point stalls with merit between 1e-5 and 1e-4 (the condensed ``K`` of a thin strip is ill
+    conditioned).  The crossover from there ends certified, so the LPs stay on the dense path
+    (0.9 s) instead of HiGHS (36 s, and a ``lam2`` 1.4e-5 too high: its point violates rows by
+    8.6e-6).  Checked: no HiGHS path, the ``lam2`` state feasible to 1e-10, the Farkas
+    certificate of ``lam2``."""
+    from shakedown import fe
+
+    def no_highs(*a, **k):
+        raise AssertionError("the HiGHS path was taken")
+
+    monkeypatch.setattr(engine, "solve_highs", no_highs)
+    nx = 499
+    loads = {"dead": fe.Traction("top", (0.0, -1.0)), "shake": fe.Traction("top", (0.4, 0.0))}
+    model = fe.FEModel(fe.rectangle(nx / 100, 0.1, nx, 8), fe.isotropic(1.0, 0.3),
+                       dirichlet={"left": "xy"}, contact=["bottom"], loads=loads, friction=0.5)
+    cm = model.condense()
+    b = sd.shakedown_bounds(cm.system, cm.load_cycle(static="dead", cyclic="shake"))
+    assert b.status == "bounded" and 0 < b.lam1 < b.lam2
+    cs = b.constraints
+    off = cs.offsets(b.lam2)
+    assert (cs.G @ b.state_at_lam2 - off).max() <= 1e-10 * np.abs(off).max()
+    assert max(b.residuals.values()) <= 1e-9
+    # Farkas certificate of lam2 (multipliers >= 0 to the certificates' 1e-9)
+    y = b.certificate
+    ys = np.abs(y).max()
+    assert y.min() >= -1e-9 * ys
+    assert np.abs(cs.G.T @ y).max() <= 1e-9 * np.abs(cs.G).max() * ys
+    assert cs.c @ y / (-(cs.m @ y)) == pytest.approx(b.lam2, rel=1e-8)
