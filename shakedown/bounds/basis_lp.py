@@ -128,7 +128,7 @@ class BasisLP:
             d = c + (z @ KT[:m] if m else 0.0) + y * float(mJ[T] @ z if m else 0.0)
             d[P] = 0.0
             # leaving variable: row k first, then the most infeasible
-            if kl >= 0 and kl not in T:  # its slack must come to 0
+            if kl >= 0 and kl not in T and abs(sJ[kl]) > self.tol:  # its slack must come to 0
                 kind, q, sgn = "row", kl, (-1.0 if sJ[kl] > 0 else 1.0)
             else:
                 i = int(np.argmin(sJ))
@@ -258,6 +258,8 @@ class BasisLP:
             bs[T] = False
             rl = np.where(bl, np.maximum(sP, 0.0) / np.where(bl, -dP, 1.0), np.inf)
             rs = np.where(bs, np.maximum(sJ, 0.0) / np.where(bs, -dS, 1.0), np.inf)
+            if kl >= 0 and kl not in T and abs(dS[kl]) > PIV_TOL:
+                rs[kl] = 0.0  # row k, tight but not in T, must stay tight: it enters T
             il = int(np.argmin(rl)) if m else -1
             is_ = int(np.argmin(rs))
             if not min(rl[il] if m else np.inf, rs[is_]) < np.inf:

@@ -255,13 +255,13 @@ def _interior_centre(G, norms, b, cap, ans):
     a 2000-crack network whose largest balls form a face, not a vertex; HiGHS took 358 s).
 
     The centre ``v`` is the iterate's; its radius is recomputed from scratch,
-    ``r = min_i (b_i - G_i v) / |G_i|`` (the ball lies in ``H``).  Accepted only if the
+    ``r = min_i (b_i - G_i v) / |G_i|`` (the ball lies in ``H``; at most the cap).  Accepted only if the
     multipliers ``y >= 0`` prove that no ball is larger by more than :data:`CENTRE_RTOL`:
     ``r* <= b.y + cap y_cap`` (weak duality, with ``G^T y = 0`` and ``|G| . y + y_cap = 1`` to
     the same tolerance).  Else ``None`` (HiGHS)."""
     n = G.shape[1]
     v, y = ans.x[:n], np.maximum(ans.y, 0.0)
-    r = float(np.min((b - G @ v) / norms))
+    r = min(float(np.min((b - G @ v) / norms)), cap)
     yr, ycap = y[:-1], y[-1]
     ys = max(float(np.abs(yr).max(initial=0.0)), 1e-300)
     stat = max(float(np.abs(G.T @ yr).max()) / (ys * np.abs(G).max()),

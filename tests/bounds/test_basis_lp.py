@@ -25,8 +25,8 @@ from shakedown.bounds.facet_walk import certified_rows
 from shakedown.bounds.single_simplex import single_dual_simplex
 
 
-def _setup(system, load):
-    A, b, e, main, tab = _lp(system, load)
+def _setup(system, load, dup=False):
+    A, b, e, main, tab = _lp(system, load, dup=dup)
     n = len(e) - 1
     R = A.shape[0] - 1
     G, c, m = A[:R, :n], b[:R], -A[:R, n]
@@ -44,13 +44,17 @@ def _highs_lam_high(tab, k):
     return -res.fun
 
 
-@pytest.mark.parametrize("case", ["random12", "random40", "kachanov60"])
+@pytest.mark.parametrize("case", ["random12", "random40", "dup20", "kachanov60"])
 def test_every_row_matches_the_lp_in_v_and_highs(case):
+    """``dup20``: every row twice, so every vertex is degenerate and every ratio test ties (the
+    copies of the lam2 basis rows are tight at ``sigma = 0``)."""
     if case.startswith("random"):
         system, load = random_problem(int(case[6:]), 1)
+    elif case.startswith("dup"):
+        system, load = random_problem(20, 2)
     else:
         system, load = _kachanov(60, 3)
-    f, tab, main = _setup(system, load)
+    f, tab, main = _setup(system, load, dup=case.startswith("dup"))
     lp = BasisLP(f, tab)
     lam2 = main.x[-1]
     checked = 0
@@ -202,12 +206,13 @@ def _sep_rows(ans, system, load):
     return A / nrm[:, None], b / nrm, np.r_[np.zeros(n), 1.0]
 
 
-def test_primal_finish_repairs_wrong_costs():
+@pytest.mark.parametrize("dup", [False, True])
+def test_primal_finish_repairs_wrong_costs(dup):
     """The dual simplex run on wrong (non-negative) costs ends at a basis optimal for them; the
     primal simplex on the true costs must then reach the true optimum (the path taken when
-    multipliers of a degenerate lam2 basis are clipped)."""
+    multipliers of a degenerate lam2 basis are clipped); also with every row twice."""
     system, load = random_problem(30, 3)
-    f, tab, main = _setup(system, load)
+    f, tab, main = _setup(system, load, dup=dup)
     good = BasisLP(f, tab)
     wrong = BasisLP(f, tab)
     rng = np.random.default_rng(0)
