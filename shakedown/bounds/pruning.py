@@ -41,7 +41,7 @@ solved exactly, uncapped, by :class:`~.basis_lp.BasisLP` (a dual simplex from th
 vertex with an ``m x m`` working basis, ``m`` the rows tight outside the ``lam2`` basis: a pivot
 costs ``O(N m)`` instead of ``O(N^2)``).  Everything they find is checked in ``v`` as above; the
 walk in ``v`` and the LPs in ``v`` described above are the fallback (issue 14, N = 2000: the
-random system of ``test_n2000_finishes`` 595 s -> 44 s, a 2000-crack network 754 s -> 84 s).
+random system of ``test_n2000_finishes`` 549 s -> 43 s, a 2000-crack network 720 s -> 80 s).
 """
 
 from __future__ import annotations
