@@ -207,7 +207,8 @@ class BarycentricWalk:
 
     def _flush(self) -> bool:
         """Check the buffered vertices in ``v`` (one product ``G X``); their tight rows join
-        ``covered``.  ``False`` if the last one (the current vertex) fails."""
+        ``covered``.  ``False`` if the last one fails (the walk then stops as broken; an
+        earlier one that fails only adds nothing)."""
         X, self._buffer = self._buffer, []
         if not X:
             return True

@@ -234,8 +234,8 @@ class _Pruner:
         return self.frame
 
     def fast_walk(self, t, T):
-        """A walk in barycentric coordinates of the lam2 simplex from the vertex ``T`` of
-        ``H(t)`` (:mod:`.barycentric_walk`), or ``None`` where it does not apply."""
+        """A walk in the coordinates of the lam2 basis from the vertex ``T`` of ``H(t)``
+        (:mod:`.barycentric_walk`), or ``None`` where they do not apply."""
         if not self.simplex() or not 0.0 <= t < self.lam2:
             return None
         walk = BarycentricWalk(self.frame, t, T)
