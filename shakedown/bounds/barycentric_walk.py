@@ -39,7 +39,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from . import inverse_updates as iu
-from .facet_walk import FacetWalk, certified_rows
+from .facet_walk import FacetWalk, batch_check
 
 #: Most rows outside the ``lam2`` basis that may be tight at a vertex of a walk (beyond it the
 #: walk stops, ``broken``, and the pruning goes on in ``v`` from the same vertex).  No limit by
@@ -212,15 +212,11 @@ class BarycentricWalk:
         X, self._buffer = self._buffer, []
         if not X:
             return True
-        GX = self.G @ np.column_stack(X)
-        good = True
-        for i, x in enumerate(X):
-            tight = certified_rows(self.G, self.b, x, Gx=GX[:, i])
-            if tight is None:
-                good = i < len(X) - 1 and good
-                continue
-            self.covered |= tight
-        return good
+        _, tights = batch_check(self.G, self.b, X)
+        for tight in tights:
+            if tight is not None:
+                self.covered |= tight
+        return tights[-1] is not None
 
     # ------------------------------------------------------------------ walking
     def walk_to(self, k: int, cap: int):
@@ -312,7 +308,7 @@ class BarycentricWalk:
         if self.since >= REFACTOR and not self._refactor():
             return None
         if e >= 0 or kind == "row":
-            if any(not self.covered[self.f.J[r]] for r in self.Tl):
+            if not self.covered[self.f.J[self.Tl]].all():
                 self._buffer.append(self._vertex())
                 if len(self._buffer) >= CHECK_BATCH and not self._flush():
                     return None

@@ -24,6 +24,8 @@ import warnings
 import numpy as np
 import scipy.linalg as sla
 
+from .inverse_updates import rank1
+
 #: Feasibility / tightness tolerance of a certificate point (relative to the row scale).
 WALK_TOL = 1e-9
 #: Smallest ``G_i d`` that limits a primal step (rows have unit norm).
@@ -45,6 +47,13 @@ def certified_rows(G, b, x, tol=WALK_TOL, Gx=None):
     if np.any(s < -tol * scale):
         return None
     return np.abs(s) <= tol * scale
+
+
+def batch_check(G, b, X):
+    """``(G X, masks)`` for the points of the list ``X``: one product with ``G``, then each
+    point's :func:`certified_rows` (``None`` where it fails)."""
+    GX = G @ np.column_stack(X)
+    return GX, [certified_rows(G, b, x, Gx=GX[:, i]) for i, x in enumerate(X)]
 
 
 class FacetWalk:
@@ -153,7 +162,7 @@ class FacetWalk:
             w[r] -= 1.0
             # Binv -= (d / Gd_p) w^T, in place (BLAS rank-1 update on the transposed view);
             # then y = Binv^T g changes by -(g.d / Gd_p) w = (y_r / Gd_p) w
-            self.Binv = sla.blas.dger(-1.0 / Gd[p], w, d, a=self.Binv.T, overwrite_a=True).T
+            self.Binv = rank1(self.Binv, -1.0 / Gd[p], d, w)
             y = y + (y[r] / Gd[p]) * w
             self.x = self.x + step * d
             self.s -= step * Gd  # updated slacks (the ratio test); exact ones come in batches
@@ -183,9 +192,8 @@ class FacetWalk:
         self._buffer = []
         if not X or X[-1] is not self.x:
             return self._certify()
-        GX = self.G @ np.column_stack(X)
-        for i in range(len(X) - 1):
-            tight = certified_rows(self.G, self.b, X[i], Gx=GX[:, i])
+        GX, tights = batch_check(self.G, self.b, X)
+        for tight in tights[:-1]:
             if tight is not None:
                 self.covered |= tight
         return self._certify(GX[:, -1])
@@ -233,8 +241,7 @@ class FacetWalk:
             r = int(np.argmax(np.where(near, alpha, -np.inf)))
             w = alpha.copy()
             w[r] -= 1.0
-            self.Binv = sla.blas.dger(-1.0 / alpha[r], w, self.Binv[:, r].copy(),
-                                      a=self.Binv.T, overwrite_a=True).T
+            self.Binv = rank1(self.Binv, -1.0 / alpha[r], self.Binv[:, r].copy(), w)
             self.inb[self.T[r]] = False
             self.inb[p] = True
             self.T[r] = p

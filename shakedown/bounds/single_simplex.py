@@ -15,6 +15,7 @@ import scipy.linalg as sla
 
 from .certificates import CERT_TOL, FEAS_TOL, PIVOT_TOL, DenseAnswer, batch_residuals
 from .dual_simplex import Tableau
+from .inverse_updates import rank1
 
 #: Pivots between two refactorisations of the explicit inverse in :func:`single_dual_simplex`.
 REFACTOR_EVERY = 256
@@ -106,7 +107,7 @@ def single_dual_simplex(tab: Tableau, equal_rows=(), *, max_pivots=None) -> Dens
         w = alpha.copy()
         w[r] -= 1.0
         # B^-1 -= d w^T / alpha_r (row r of B becomes sp a_p), in place on the C view
-        Binv = sla.blas.dger(-1.0 / ar, w, d, a=Binv.T, overwrite_a=True).T
+        Binv = rank1(Binv, -1.0 / ar, d, w)
         inbasis[bas[r]] = False
         inbasis[p] = True
         bas[r] = p
