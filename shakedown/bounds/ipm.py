@@ -140,19 +140,48 @@ def _step(v, dv):
 
 
 def identify_basis(A, z, s, n):
-    """Guess the optimal basis: the ``n`` rows with the largest ``z / s`` (non-singular)."""
+    """Guess the optimal basis: the ``n`` rows with the largest ``z / s`` when they are
+    non-singular; at a degenerate vertex (more than ``n`` active rows, the leading ``n``
+    dependent) the first ``n`` independent rows in that order (:func:`_independent_rows`).
+    ``None`` when no ``n`` independent rows are found."""
     order = np.argsort(-(z / np.maximum(s, 1e-300)), kind="stable")
     T = np.sort(order[:n])
+    if _nonsingular(A[T]):
+        return T
+    T = _independent_rows(A, order, n)
+    return T if T is not None and _nonsingular(A[T]) else None
+
+
+def _nonsingular(M) -> bool:
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", sla.LinAlgWarning)
-            lu = sla.lu_factor(A[T], check_finite=False)
+            lu = sla.lu_factor(M, check_finite=False)
     except (np.linalg.LinAlgError, ValueError):
-        return None
+        return False
     d = np.abs(np.diag(lu[0]))
-    if d.min() <= 1e-12 * d.max():
-        return None
-    return T
+    return bool(d.min() > 1e-12 * d.max())
+
+
+def _independent_rows(A, order, n, rtol=1e-9):
+    """The first ``n`` rows of ``A`` in ``order`` each independent of those before it
+    (Gram-Schmidt, orthogonalised twice), sorted; ``None`` if fewer than ``n`` exist."""
+    Q = np.empty((n, A.shape[1]))
+    picked = []
+    for i in order:
+        a = A[i]
+        na = np.linalg.norm(a)
+        if na == 0.0:
+            continue
+        r = a - (a @ Q[: len(picked)].T) @ Q[: len(picked)]
+        r -= (r @ Q[: len(picked)].T) @ Q[: len(picked)]
+        nr = np.linalg.norm(r)
+        if nr > rtol * na:
+            Q[len(picked)] = r / nr
+            picked.append(int(i))
+            if len(picked) == n:
+                return np.sort(np.asarray(picked, dtype=int))
+    return None
 
 
 def complete_basis(A, z, s, e, n, max_missing=None):

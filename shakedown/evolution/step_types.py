@@ -50,7 +50,10 @@ class StepResult:
         undecided).
     message : str
     residual : float
-        ``max(complementarity_residual, equilibrium_residual)``.
+        ``max(complementarity_residual, equilibrium_residual)``.  An answer is accepted when it
+        is at most ``feas_tol``, or ``10 feas_tol`` for the Lemke fallback (``method ==
+        "lemke"``, the steps the active set cannot finish: it pivots on a dense ``K^-1`` and
+        keeps its round-off, ~1e-9 at ``cond(K) = 1e6``).
     complementarity_residual : float
         Largest natural residual ``|min(x, y)|`` over the pairs ``(w, p)``, ``(dv+, f p + q)``,
         ``(dv-, f p - q)``, forces scaled by ``force_scale``, slips and gaps of node ``j`` by

@@ -99,8 +99,49 @@ def test_degenerate_optimum_is_completed_not_abandoned(n):
     ans, _ = dense_lp.solve_max(A, b, e)
     assert ans is not None and ans.status == "optimal"
     assert ans.x[-1] == pytest.approx(highs_max(A, b, e), rel=1e-7)
-    # certificate: y >= 0 and A^T y = e (the interior point's accuracy, 1e-8 relative)
-    assert np.all(ans.y >= 0) and np.allclose(A.T @ ans.y, e, atol=1e-7)
+    # certificate: y >= 0 (up to round-off of the basis solve: -5e-19 measured) and A^T y = e
+    # (the interior point's accuracy, 1e-8 relative)
+    assert np.all(ans.y >= -1e-14 * np.abs(ans.y).max()) and np.allclose(A.T @ ans.y, e, atol=1e-7)
+
+
+def test_degenerate_vertex_basis_skips_dependent_rows():
+    """More than ``n`` rows active at the optimum and the ``n`` with the largest ``z / s``
+    linearly dependent (the 20-node tensile problem of ``test_basis_lp`` with numpy 2.4.6, OpenBLAS 0.3.31:
+    rank 19 of 21): the crossover's basis is the first ``n`` independent rows in that order,
+    not ``None`` (which sent the LP to HiGHS)."""
+    from shakedown.bounds.ipm import identify_basis
+
+    rng = np.random.default_rng(5)
+    n = 6
+    V = rng.standard_normal((n, n))
+    A = np.vstack([V[:2], V[:2].sum(0), V[2:], rng.standard_normal((4, n))])  # row 2 = 0 + 1
+    r = np.r_[9.0, 8.0, 7.0, 6.0, 5.0, 4.0, 3.0, 1e-12 * np.ones(4)]  # z / s, slacks 1
+    T = identify_basis(A, r, np.ones(len(r)), n)
+    assert T is not None and list(T) == [0, 1, 3, 4, 5, 6]
+    assert np.linalg.matrix_rank(A[T]) == n
+    # no n independent rows among all of them: None, never a singular basis
+    assert identify_basis(np.vstack([V[:3], V[:3]]), np.ones(6), np.ones(6), n) is None
+    # the end to end case: certified by the dense path, equal to HiGHS
+    A2, b2, e2 = _tensile_lp()
+    ans, _ = dense_lp.solve_max(A2, b2, e2)
+    assert ans is not None and ans.status == "optimal" and max(ans.residuals) <= 1e-9
+    assert ans.x[-1] == pytest.approx(highs_max(A2, b2, e2), rel=1e-9)
+
+
+def _tensile_lp():
+    import sys
+    from pathlib import Path
+
+    from shakedown.bounds import extreme_constraints
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from test_basis_lp import _tensile_problem
+
+    system, load = _tensile_problem(20, 4)
+    cs = extreme_constraints(system, load)
+    n = system.n_nodes
+    A = np.vstack([np.hstack([cs.G, -cs.m[:, None]]), np.r_[np.zeros(n), -1.0][None, :]])
+    return A, np.r_[cs.c, 0.0], np.r_[np.zeros(n), 1.0]
 
 
 # ---------------------------------------------------------------------- issue 13/14 regressions

@@ -54,7 +54,9 @@ def test_reported_residual_is_the_residual_of_the_reported_answer():
             # numbers of size 1 (1e-15 = 5 ulp); measured difference 0.0
             assert abs(r.complementarity_residual - nat) <= 1e-6 * nat + 1e-15, (seed, nat)
             assert r.residual >= r.complementarity_residual
-            assert r.residual <= FEAS_TOL
+            # the acceptance rule (StepResult.residual): 10 FEAS_TOL for the Lemke fallback
+            # (numpy 2.4.6 / OpenBLAS 0.3.31: seed 6, first step: Lemke, residual 1.4e-9)
+            assert r.residual <= (10 if r.method == "lemke" else 1) * FEAS_TOL
             worst = max(worst, nat)
             v = r.slip
     # premise: round-off leaves a visible residual on these systems (measured max 1.2e-12 at
