@@ -50,6 +50,7 @@ _LAZY = {
     "gallery": None,
     "sweep": "studies.sweep",
     "half_plane_model": "models.half_plane",
+    "UncondensedSystem": "model.uncondensed",
 }
 
 #: Modules that moved in the stage layout (0.2), by their old name: ``import shakedown.sweep``

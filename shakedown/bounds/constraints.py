@@ -126,7 +126,14 @@ def extreme_constraints(system: DiscreteSystem, load: LoadCycle) -> ConstraintSe
     """Assemble the extreme constraints of ``system`` under ``load`` (module docstring)."""
     _check_pair(system, load)
     A, B, f = system.A, system.B, system.friction
-    if system.is_sparse:  # rows scaled by f: diag(f) B^T, all sparse
+    if hasattr(system.K, "columns"):  # uncondensed (K = Schur complement of K_z): its rows
+        # A - f B^T are dense; [A; B^T] = K[:, :N] by N sparse solves, never all of K
+        n = system.n_nodes
+        AB = system.K.columns(np.arange(n))
+        FBt = f[:, None] * AB[n:]
+        G = np.vstack([AB[:n] - FBt, -(AB[:n] + FBt)])
+        sep_G = -AB[n:]
+    elif system.is_sparse:  # rows scaled by f: diag(f) B^T, all sparse
         FBt = sp.diags(f) @ B.T
         G = sp.vstack([A - FBt, -(A + FBt)], format="csr")
         sep_G = sp.csr_matrix(-B.T)

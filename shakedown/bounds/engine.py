@@ -97,7 +97,10 @@ def shakedown_bounds(
         ``"highs"``: every LP by HiGHS (one model, warm starts): the reference.  A sparse system
         (``system.is_sparse``) always takes the HiGHS path on its sparse constraint matrix
         (``intervals="lam1"``: shared vertices and incumbent pruning,
-        :mod:`shakedown.bounds.highs_pruning`); nothing is densified.
+        :mod:`shakedown.bounds.highs_pruning`); nothing is densified.  An uncondensed FE
+        system (:class:`~shakedown.model.uncondensed.UncondensedSystem`) has dense constraint
+        rows ``A -/+ F B^T`` (a Schur complement): they are formed by ``N`` sparse solves (never
+        all of ``K``) and take the dense path.
 
     Returns
     -------
@@ -127,7 +130,7 @@ def shakedown_bounds(
     sc = Scales.of(cs)
     ch = sc.nondimensional(cs)
     out = None
-    if solver == "auto" and not system.is_sparse:
+    if solver == "auto" and not sp.issparse(cs.G):
         out = solve_dense(ch, intervals, adjacency, separation)
     if out is None:
         out = solve_highs(ch, load.has_periodic_part, intervals, adjacency, separation)

@@ -45,6 +45,7 @@ import numpy as np
 from scipy.linalg import get_lapack_funcs
 
 from ..model.errors import InputError, ShapeError
+from ..model.schur import SchurStiffness
 from ..model.system import DiscreteSystem
 from ..model.threads import single_blas_thread
 from ..model.validation import check_node_vector
@@ -127,7 +128,9 @@ class StepSolver(FactorCache, ActiveSet, Fallbacks):
         n = self.n = system.n_nodes
         self.A, self.B, self.C = system.A, system.B, system.C
         self.sparse = system.is_sparse
-        self.Bt = system.B.T.tocsr() if self.sparse else np.ascontiguousarray(system.B.T)
+        self.schur = isinstance(system.K, SchurStiffness)  # uncondensed: K never formed
+        self.Bt = (system.B.T if self.schur else system.B.T.tocsr() if self.sparse
+                   else np.ascontiguousarray(system.B.T))
         self.f = np.asarray(system.friction, float)
         self.K = system.K
         self.diag = system.diagonal()
@@ -191,7 +194,10 @@ class StepSolver(FactorCache, ActiveSet, Fallbacks):
         """
         n = self.n
         self.totals["steps"] += 1
-        if base is None:
+        if base is None and self.schur:  # (A v, B^T v) by one product with K
+            r = self.K @ np.concatenate([v_prev, np.zeros(n)])
+            q0, p0 = q_w + r[:n], p_w + r[n:]
+        elif base is None:
             q0 = q_w + self.A @ v_prev
             p0 = p_w + self.Bt @ v_prev
         else:
@@ -249,7 +255,11 @@ class StepSolver(FactorCache, ActiveSet, Fallbacks):
         n = self.n
         sep = np.flatnonzero(gap)
         q0, p0 = q + dq_w, p + dp_w
-        if sep.size:
+        if sep.size and self.schur:
+            r = self.K @ np.concatenate([np.zeros(n), gap])
+            q0 -= r[:n]
+            p0 -= r[n:]
+        elif sep.size:
             r = self.K[n + sep].T @ gap[sep] if self.sparse else gap[sep] @ self.K[n + sep]
             q0 -= r[:n]
             p0 -= r[n:]

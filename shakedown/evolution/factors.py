@@ -31,10 +31,13 @@ import scipy.sparse.linalg as spla
 from scipy.linalg.lapack import dgecon
 
 from . import kernel as _kernel
+from . import schur_step
 from .step_types import BACKWARD, FORWARD, SEPARATED, STICK, _Factor
 
 #: ``_last_factor`` of an answer solved by the compiled kernel (its reactions are kept).
 _KERNEL = object()
+#: ``_last_factor`` of an answer solved with the interior DOFs (its reactions are kept).
+_SCHUR = object()
 
 
 class FactorCache:
@@ -68,7 +71,7 @@ class FactorCache:
         (a CSR matrix for a sparse system)."""
         n = self.n
         cols = np.asarray(cols, int)
-        if self.sparse:
+        if self.sparse and not self.schur:
             out = self.K[np.concatenate([jv, n + jw])][:, cols]
             if jv.size:
                 top = out[:jv.size] + sp.diags(coef) @ self.K[n + jv][:, cols]
@@ -85,6 +88,8 @@ class FactorCache:
     # ------------------------------------------------------------------ factorizations
     def _factor(self, s, key):
         free, coef, jv, jw = self._layout(s)
+        if self.schur:
+            return self._factor_schur(s, key, free, coef, jv, jw)
         Ms = self._G_rows(s, free, coef, jv, jw, free)
         if self.sparse:
             return self._factor_sparse(s, key, free, coef, jv, jw, Ms)
@@ -119,6 +124,16 @@ class FactorCache:
             return None
         nbytes = 12 * (lu.L.nnz + lu.U.nnz) + 8 * Ms.shape[0]
         return self._store(_Factor(key, s.copy(), free, coef, jv, jw, lu, nbytes))
+
+    def _factor_schur(self, s, key, free, coef, jv, jw):
+        """Sparse LU of the assignment's system with the interior DOFs of an uncondensed ``K``
+        (:mod:`.schur_step`); ``None`` if (nearly) singular."""
+        lu = schur_step.factor(self.K, free, coef, jv, jw)
+        self.totals["factorizations"] += 1
+        self._counters["factorizations"] += 1
+        if lu is None:
+            return None
+        return self._store(_Factor(key, s.copy(), free, coef, jv, jw, lu, lu.nbytes))
 
     def _store(self, F):
         """Cache ``F`` (LRU within ``cache_bytes``) and make it the base of updates."""
@@ -239,6 +254,12 @@ class FactorCache:
         once when ``F`` was factorized, so scipy's per-call checks are skipped)."""
         z = np.zeros(2 * self.n)
         rhs = self._rhs(F.coef, F.jv, F.jw, q0, p0)
+        if self.schur:  # the reactions come with the solve (no second solve with K_ii)
+            x, r = F.lu.solve_with_reactions(rhs)
+            z[F.free] = x
+            self._last_factor = _SCHUR
+            self._kernel_answer = (z, q0 + r[:self.n], p0 + r[self.n:])
+            return z
         if self.sparse:
             x = F.lu.solve(rhs)
         else:
@@ -280,7 +301,8 @@ class FactorCache:
         over consecutive steps, or the same step of the next period on the way to a steady
         cycle) is worth one LU so that later visits are plain cache hits.
         """
-        if key in self._cache or not np.any(s != STICK) or self._last_factor is _KERNEL:
+        if key in self._cache or not np.any(s != STICK) or self._last_factor in (_KERNEL,
+                                                                                 _SCHUR):
             return
         count = self._accepted.get(key, 0) + 1
         if len(self._accepted) > 100000:
@@ -309,7 +331,7 @@ class FactorCache:
         non-zero entries are gathered (``K`` is symmetric: rows instead of strided columns).
         """
         n = self.n
-        if F is _KERNEL:
+        if F is _KERNEL or F is _SCHUR:
             kz, kq, kp = self._kernel_answer
             if kz is z:
                 return kq, kp

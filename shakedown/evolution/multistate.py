@@ -107,15 +107,20 @@ def _group(solver, key, idx, V, q_w, p_w, guesses, Q0, P0, scales, out):
         if F is None:
             return
         rhs = -np.hstack([q0[:, F.jv] + F.coef * p0[:, F.jv], p0[:, F.jw]])
-        if solver.sparse:
+        if solver.schur:  # the reactions come with the solve
+            X, R = F.lu.solve_with_reactions(np.ascontiguousarray(rhs.T))
+        elif solver.sparse:
             X = F.lu.solve(np.ascontiguousarray(rhs.T))
         else:
             X, info = solver._getrs(F.lu[0], F.lu[1], rhs.T, overwrite_b=True)
             if info != 0:
                 return
         Z[:, F.free] = X.T
-        kr = F.krows if F.krows is not None else solver.K[F.free]
-        R = X.T @ kr
+        if solver.schur:
+            R = R.T
+        else:
+            kr = F.krows if F.krows is not None else solver.K[F.free]
+            R = X.T @ kr
         q, p = q0 + R[:, :n], p0 + R[:, n:]
         solver._cache.move_to_end(key)
         solver._base = F
@@ -208,7 +213,9 @@ def _implicit_cycles(solver, c, tracks, qw, pw, load, lam):
     R0 = np.hstack([V[:, 0], Wg[:, 0]]) @ solver.K
     Q[:, 0], P[:, 0] = q0w + R0[:, :n], p0w + R0[:, n:]
     guesses = np.array([tr.guess for tr in tracks], np.int8)
-    R1 = V[:, 0] @ solver.K[:n]  # the first step's base from scratch: (A v, B^T v)
+    # the first step's base from scratch: (A v, B^T v)
+    R1 = (np.hstack([V[:, 0], np.zeros_like(V[:, 0])]) @ solver.K if solver.schur
+          else V[:, 0] @ solver.K[:n])
     Q0, P0 = qw[0] + R1[:, :n], pw[0] + R1[:, n:]
     Wd = np.zeros(k)
     worst = np.zeros(k)

@@ -380,9 +380,7 @@ class DiscreteSystem:
             return result(self._critical_factor_by_enumeration(), True, "enumeration")
         if self.is_sparse:
             # (A - B C^-1 B^T)^-1 is the leading block of K^-1: Lanczos with solves, no dense Schur
-            lmin = _sparse.smallest_schur_eigenvalue(self.K, n)
-            Fs = sp.diags(f)
-            lmax = _sparse.largest_eigenvalue(sp.csr_matrix(Fs @ self.C @ Fs))
+            lmin, lmax = _sparse.critical_eigenvalues(self, f)
             return result(min(np.sqrt(max(lmin, 0.0) / lmax), upper), False, "sufficient-bound")
         schur = self.A - self.B @ np.linalg.solve(self.C, self.B.T)
         lmin = float(np.linalg.eigvalsh(0.5 * (schur + schur.T))[0])

@@ -124,8 +124,8 @@ def as_dynamic_stiffness(source, mass=None):
     if callable(source) and not isinstance(source, np.ndarray):
         return source
     K = source.K if hasattr(source, "K") else source
-    if sp.issparse(K):  # the eigenproblems are dense: a sparse K (2N x 2N) is densified here
-        K = K.toarray()
+    if sp.issparse(K) or hasattr(K, "toarray"):  # the eigenproblems are dense: a sparse or
+        K = K.toarray()  # uncondensed K (2N x 2N) is densified here
     K = real_array("K", K)
     if K.ndim != 2 or K.shape[0] != K.shape[1] or K.shape[0] % 2:
         raise ShapeError(f"K must have shape (2N, 2N); got {K.shape}")

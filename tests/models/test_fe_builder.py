@@ -120,3 +120,27 @@ def test_shipped_fe_scenes_build(tmp_path, name):
         mu = (o @ system.A @ o) / abs(o @ system.B @ o)
         assert mu == pytest.approx(0.2629238, abs=5e-8)  # seed 001
         assert cm.M is not None
+
+
+def test_sparse_fe_scene_equals_condensed(tmp_path):
+    """``sparse = true``: the uncondensed model (``FEModel.uncondensed()``), the same load cycle
+    and bounds as the condensed one; not with ``mass`` or ``cache_dir``."""
+    import shakedown as sd
+    from shakedown.model.uncondensed import UncondensedSystem
+
+    load = {"static": {"displacement": {"top": [0.0, -0.01]}},
+            "cyclic": {"traction": {"left": [0.002, 0.0]}}}
+    s1, c1, _ = fe_builder.build(dict(SQUARE), load, tmp_path)
+    s2, c2, m2 = fe_builder.build(dict(SQUARE, sparse=True), load, tmp_path)
+    assert isinstance(s2, UncondensedSystem) and m2.K is None
+    np.testing.assert_allclose(c2.q0, c1.q0, rtol=0, atol=1e-12 * np.abs(c1.q0).max())
+    np.testing.assert_allclose(c2.p0, c1.p0, rtol=0, atol=1e-12 * np.abs(c1.p0).max())
+    b1, b2 = sd.shakedown_bounds(s1, c1), sd.shakedown_bounds(s2, c2)
+    assert b2.lam2 == pytest.approx(b1.lam2, rel=1e-9)
+    assert b2.lam1 == pytest.approx(b1.lam1, rel=1e-9)
+    with pytest.raises(SceneError, match="'sparse'"):
+        fe_builder.build(dict(SQUARE, sparse=True, mass=True), load, tmp_path)
+    with pytest.raises(SceneError, match="'sparse'"):
+        fe_builder.build(dict(SQUARE, sparse=True, cache_dir="c"), load, tmp_path)
+    with pytest.raises(SceneError, match="'sparse'"):
+        fe_builder.build(dict(SQUARE, sparse="yes"), load, tmp_path)

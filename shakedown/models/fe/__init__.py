@@ -14,11 +14,12 @@ from .condensed import CondensedModel
 from .materials import Material, isotropic, rotate_voigt, transversely_isotropic
 from .meshes import ELEMENTS, PATTERNS, FEMesh, from_file, rectangle, trapezoid
 from .polygons import polygon
+from .uncondensed import UncondensedModel
 
 __all__ = [
     "layer_uniform_stiffness",
     "Body", "BodyForce", "Displacement", "Pressure", "Traction",
-    "CondensedModel", "FEModel",
+    "CondensedModel", "FEModel", "UncondensedModel",
     "Material", "isotropic", "transversely_isotropic", "rotate_voigt",
     "ELEMENTS", "PATTERNS", "FEMesh", "from_file", "polygon", "rectangle", "trapezoid",
 ]

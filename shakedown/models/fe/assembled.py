@@ -194,15 +194,28 @@ class Assembled:
         self.t_assembly = time.perf_counter() - t0
         Kz = (self.P.T @ self.K_full @ self.P).tocsc()
         c, i = slice(0, 2 * N), slice(2 * N, nz)
-        self.Kcc, self.Kci, self.Kii = Kz[c, c].toarray(), Kz[c, i].tocsc(), Kz[i, i].tocsc()
+        self.Kz = Kz  # contact unknowns first, then the interior DOFs
+        self.Kci, self.Kii = Kz[c, i].tocsc(), Kz[i, i].tocsc()
         if mass:
             Mz = (self.P.T @ self.M_full @ self.P).tocsc()
             self.Mcc, self.Mci, self.Mii = Mz[c, c].toarray(), Mz[c, i].tocsc(), Mz[i, i].tocsc()
         coupled = self.Kci if not mass else (abs(self.Kci) + abs(self.Mci))
         self.boundary_layer = np.unique(coupled.nonzero()[1])
-        t1 = time.perf_counter()
-        self.lu = factorize(self.Kii, "K_ii", self.boundary_layer)
-        self.t_factor = time.perf_counter() - t1
+        self._lu, self.t_factor = None, 0.0
+
+    @property
+    def Kcc(self) -> np.ndarray:
+        """The contact block of ``K_z`` (dense)."""
+        return self.Kz[: 2 * self.N, : 2 * self.N].toarray()
+
+    @property
+    def lu(self):
+        """Factor of ``K_ii`` with the boundary layer last (for the condensation; once)."""
+        if self._lu is None:
+            t1 = time.perf_counter()
+            self._lu = factorize(self.Kii, "K_ii", self.boundary_layer)
+            self.t_factor = time.perf_counter() - t1
+        return self._lu
 
     def _check_support(self, held, alias):
         """Each connected part of every body must be held, in contact or joined to one."""
@@ -271,13 +284,17 @@ class Assembled:
         g = self.P.T @ (f - self.K_full @ (self.P_D @ uD))
         return g, uD
 
-    def welded(self, case: str):
+    def welded(self, case: str, solve=None):
+        """Welded reactions ``(q_w, p_w)`` of a load case (``solve``: ``K_ii^-1``, default the
+        condensation's factor)."""
         g, _ = self.load_rhs(case)
         gc, gi = g[: 2 * self.N], g[2 * self.N:]
-        r = -(gc - self.Kci @ self.lu.solve(gi)) if self.n_int else -gc
+        solve = self.lu.solve if solve is None and self.n_int else solve
+        r = -(gc - self.Kci @ solve(gi)) if self.n_int else -gc
         return r[: self.N], r[self.N:]
 
     def condensed(self) -> CondensedModel:
+        _ = self.lu  # factorized (timed) before the condensation
         t0 = time.perf_counter()
         S = self.Kcc - self.lu.schur_correction(self.Kci.T)
         S = 0.5 * (S + S.T)
@@ -299,10 +316,11 @@ class Assembled:
         return cm
 
     # ------------------------------------------------------------------ recovery
-    def displacements(self, zc: np.ndarray, case: str | None):
+    def displacements(self, zc: np.ndarray, case: str | None, solve=None):
         g, uD = self.load_rhs(case) if case is not None else (np.zeros(self.nz), None)
         gi = g[2 * self.N:]
-        zi = self.lu.solve(gi - self.Kci.T @ zc) if self.n_int else np.zeros(0)
+        solve = self.lu.solve if solve is None and self.n_int else solve
+        zi = solve(gi - self.Kci.T @ zc) if self.n_int else np.zeros(0)
         u = self.P @ np.concatenate([zc, zi])
         if uD is not None:
             u += self.P_D @ uD

@@ -223,6 +223,23 @@ class FEModel:
             cache.save(cache_dir, key, cm._to_arrays())
         return cm
 
+    def uncondensed(self):
+        """The model with its stiffness kept sparse in the contact unknowns and the interior
+        DOFs (:class:`~shakedown.fe.uncondensed.UncondensedModel`): no condensation, memory
+        ``O(nnz)``; its ``system`` runs the cyclic solver without ever forming the dense ``K``
+        (for many contact nodes); the bounds form their ``N`` constraint rows by ``N`` sparse
+        solves, the stability checks (and ``condensed()``) the dense ``K``.
+
+        Raises
+        ------
+        InputError, NotPositiveDefiniteError
+            As :meth:`condense` (no support, non-matching nodes, a singular stiffness).
+        """
+        citations.register("gustafsson2020")
+        from .uncondensed import uncondensed
+
+        return uncondensed(self.assemble(False))
+
     def assemble(self, mass: bool = False):
         """The assembled model (:class:`~shakedown.fe.assembled.Assembled`): constraint maps,
         the factorised interior block, welded reactions; ``mass=True`` also the Guyan mass."""

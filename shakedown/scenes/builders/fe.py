@@ -17,7 +17,10 @@
     ``contact`` : list of boundary names; ``periodic`` : [master, slave];
     ``friction`` : number or list of N; ``mass`` : bool (condense the mass);
     ``thickness`` : number; ``cache_dir`` : name of the on-disk cache folder, created inside
-    the output folder (a second run with the same output folder reads the condensed model).
+    the output folder (a second run with the same output folder reads the condensed model);
+    ``sparse`` : true keeps the stiffness uncondensed (``FEModel.uncondensed()``: the cyclic
+    runs never form the dense ``K``, for thousands of contact nodes; not with ``mass`` or
+    ``cache_dir``).
 ``[load]`` tables ``static``, ``cyclic`` (cos amplitude), ``cyclic_sin`` (sin amplitude), each
     with ``traction`` ({boundary = [t_x, t_y]}), ``pressure`` ({boundary = p}, compression
     positive), ``body_force`` ([b_x, b_y]), ``displacement`` ({dirichlet boundary = [u_x, u_y]}).
@@ -37,7 +40,7 @@ GEOMETRIES = ("rectangle", "trapezoid", "polygon", "mesh_file")
 MODEL_KEYS = (
     "geometry", "width", "height", "bottom_width", "top_width", "top_offset", "nx", "ny",
     "pattern", "vertices", "side_names", "refine", "file", "boundaries", "element", "material",
-    "dirichlet", "contact", "periodic", "friction", "mass", "thickness", "cache_dir",
+    "dirichlet", "contact", "periodic", "friction", "mass", "thickness", "cache_dir", "sparse",
 )
 GEOMETRY_KEYS = {
     "rectangle": ("width", "height", "nx", "ny"),
@@ -169,7 +172,14 @@ def build(model: dict, load: dict, scene_dir: Path, cache_root: Path | None = No
             cache_path = Path(cache_root) / name
         else:
             cache_path = None
-        cm = fem.condense(mass=bool(model.get("mass", False)), cache_dir=cache_path)
+        sparse = model.get("sparse", False)
+        if not isinstance(sparse, bool):
+            raise SceneError(f"[model] key 'sparse' = {sparse!r} must be true or false")
+        if sparse and (model.get("mass", False) or model.get("cache_dir")):
+            raise SceneError("[model] key 'sparse' = true keeps the stiffness uncondensed: it "
+                             "takes neither 'mass' nor 'cache_dir' (remove them, or 'sparse')")
+        cm = fem.uncondensed() if sparse else fem.condense(mass=bool(model.get("mass", False)),
+                                                            cache_dir=cache_path)
         cycle = cm.load_cycle(
             static="static" if "static" in cm.welded else None,
             cyclic="cyclic" if "cyclic" in cm.welded else None,
@@ -193,6 +203,7 @@ def resolved(model: dict, load: dict) -> tuple[dict, dict]:
     elif geometry == "polygon":
         m.setdefault("element", "P1")
         m.setdefault("refine", 3)
-    for key, value in (("friction", 0.0), ("mass", False), ("thickness", 1.0)):
+    for key, value in (("friction", 0.0), ("mass", False), ("thickness", 1.0),
+                       ("sparse", False)):
         m.setdefault(key, value)
     return m, dict(load)
