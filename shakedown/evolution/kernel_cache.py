@@ -185,14 +185,10 @@ def _apply(x, free, coef, K, q0, p0, n, z, q, p):
 def _solve_with(X, free, coef, K, q0, p0, n, z, q, p):
     """z = (dv, w) of the assignment with inverse X; q, p its reactions; returns the largest
     equation residual (force units)."""
-    m = free.size
     h = _rhs(free, coef, q0, p0, n)
-    x = np.zeros(m)
-    for i in range(m):
-        acc = 0.0
-        for k in range(m):
-            acc += X[i, k] * h[k]
-        x[i] = acc
+    # BLAS gemv: a compiled scalar loop is a serial chain of adds per row (without fastmath no
+    # reordering), 215 us against 31 us at m = 510
+    x = np.dot(X, h)
     return _apply(x, free, coef, K, q0, p0, n, z, q, p)
 
 
