@@ -214,11 +214,17 @@ def _kernel_warm(s, v, q_w, p_w, guess, med):
     """Warm steps inside the compiled period loop, and getrs on the same system: ``R`` steps
     with the same welded reactions from the state before step k (the first one solves step k,
     the others are zero-increment steps on the same assignment: the guess is the answer and its
-    inverse is cached)."""
+    inverse is cached; with :mod:`.kernel_shortcut`, from the third step on, the responses
+    kept for the assignment)."""
     import scipy.linalg as sla
     from scipy.linalg import get_lapack_funcs
 
     from shakedown.evolution import kernel, kernel_cache
+
+    try:
+        from shakedown.evolution import kernel_shortcut
+    except ImportError:  # before the shortcut
+        kernel_shortcut = None
     from shakedown.evolution.complementarity import StepSolver
 
     solver = StepSolver(s)
@@ -229,15 +235,16 @@ def _kernel_warm(s, v, q_w, p_w, guess, med):
     arr = [np.zeros((R + 1, n)) for _ in range(4)]
     ST, ACT = np.zeros((R + 1, n), np.int8), np.zeros((R, n), np.int8)
     SC, RES, WD = np.zeros(R), np.zeros(R), np.zeros(1)
+    extra = () if kernel_shortcut is None else kernel_shortcut.state(n, QW, PW)
 
     def go():
         arr[0][0] = v
-        q0, p0 = q_w + s.A @ v, p_w + s.B.T @ v
+        q0, p0 = QW[0] + s.A @ v, PW[0] + s.B.T @ v
         g = np.array(guess, np.int8)
         done = kernel.march(s.K, solver.f, solver.diag, QW, PW, 0, q0, p0, g, solver.feas_tol,
                             solver.max_iter, kc.mult, kc.keys, kc.hashes, kc.offs, kc.sizes,
                             kc.pool, kc.ipool, kc.fpool, kc.meta, kc.counters, kc.seen, arr[0],
-                            arr[1], arr[2], arr[3], ST, ACT, SC, RES, WD)
+                            arr[1], arr[2], arr[3], ST, ACT, SC, RES, WD, *extra)
         assert done == R, done
 
     go()
@@ -245,12 +252,14 @@ def _kernel_warm(s, v, q_w, p_w, guess, med):
     go()
     d = kc.counters - c0
     assert d[kernel.C_FACT] == 0 and d[kernel.C_ITER] == R, d  # every step warm
+    assert np.all(ACT == ACT[0]), "the assignment changed"
     free, coef = kernel_cache._layout(np.array(guess, np.int8), solver.f, n)
     lu = sla.lu_factor(kernel_cache._matrix(s.K, free, coef, n))
     getrs = get_lapack_funcs("getrs", (s.K,))
     rhs = np.random.default_rng(0).normal(size=free.size)
+    short = int(d[kernel.C_SHORT]) if hasattr(kernel, "C_SHORT") else 0
     return dict(kernel_step=med(go) / R, kernel_steps=R, kernel_m=int(free.size),
-                kernel_getrs=med(lambda: getrs(lu[0], lu[1], rhs)))
+                kernel_getrs=med(lambda: getrs(lu[0], lu[1], rhs)), kernel_short=short)
 
 
 def worker_siconos_problems(a):

@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import kernel as _k
+from . import kernel_shortcut as _ks
 
 
 class KernelCache:
@@ -74,11 +75,12 @@ def run_period(solver, qw, pw, v0, guess, V, Wg, Q, P, st, act, scales, res, sta
     j = 0
     K, f = _readonly(solver.K), _readonly(solver.f)
     qw, pw = np.ascontiguousarray(qw), np.ascontiguousarray(pw)
+    sc = _ks.state(n, qw, pw)
     while j < n_steps:
         done = _k.march(K, f, solver.diag, qw, pw, j, q0, p0, s, solver.feas_tol,
                         solver.max_iter, kc.mult, kc.keys, kc.hashes, kc.offs, kc.sizes,
                         kc.pool, kc.ipool, kc.fpool, kc.meta, kc.counters, kc.seen, V, Wg, Q, P,
-                        st, act, scales, res, wd)
+                        st, act, scales, res, wd, *sc)
         if done > j:
             statuses[status] = statuses.get(status, 0) + done - j
         j = done
@@ -142,5 +144,5 @@ def warm_up() -> float:
     _k.march(_readonly(K), _readonly([0.5]), np.ones(2), qw, pw, 0, qw[0].copy(), pw[0].copy(),
              np.zeros(n, np.int8), 1e-9, 4, kc.mult, kc.keys, kc.hashes, kc.offs, kc.sizes,
              kc.pool, kc.ipool, kc.fpool, kc.meta, kc.counters, kc.seen, V, Wg, Q, P, st, act,
-             np.zeros(2), np.zeros(2), np.zeros(1))
+             np.zeros(2), np.zeros(2), np.zeros(1), *_ks.state(n, qw, pw))
     return time.perf_counter() - t

@@ -11,7 +11,10 @@ a pair of triangular solves) and one with the ``m`` rows of ``K``; a new assignm
 last solved one is reached by block updates of that inverse (:mod:`.kernel_updates`: unknowns
 removed, row coefficients changed, unknowns appended, ``O(m^2 r)`` for ``r`` changes, chosen
 when a flop count says they are cheaper than inverting afresh) and otherwise inverted afresh
-(LAPACK through numpy); :mod:`.kernel_cache` holds the inverses.  Every solve must satisfy
+(LAPACK through numpy); :mod:`.kernel_cache` holds the inverses.  A step that keeps the
+previous step's assignment (after two steps that kept it) costs ``O(N r)`` by the responses of
+that assignment to the ``r`` directions of the period's load increments
+(:mod:`.kernel_shortcut`), checked like every other answer.  Every solve must satisfy
 its equations to ``1e-3 feas_tol`` (relative) and a fresh inverse must have a 1-norm
 condition number below ``1e12``: an updated inverse that fails is recomputed afresh; an
 ill-conditioned assignment, whose explicit inverse is not backward stable, is solved once by
@@ -33,6 +36,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import kernel_shortcut as _ks
 from .kernel_cache import (
     BACKWARD,
     FORWARD,
@@ -68,7 +72,7 @@ UPDATE_MIN_SIZE = 8
 __all__ = ["march", "HAVE_KERNEL"]
 
 # counter indices
-C_ITER, C_HITS, C_FACT, C_UPD, C_STEPS, C_LU = 0, 1, 2, 3, 4, 5
+C_ITER, C_HITS, C_FACT, C_UPD, C_STEPS, C_LU, C_SHORT = 0, 1, 2, 3, 4, 5, 6
 
 
 @njit(cache=True)
@@ -231,35 +235,65 @@ def _maxabs(x):
 
 @njit(cache=True)
 def march(K, f, diag, QW, PW, j0, q0, p0, s, feas_tol, max_iter, mult, keys, hashes, offs,
-          sizes, pool, ipool, fpool, meta, counters, seen, V, WG, Q, P, ST, ACT, SC, RES, WD):
+          sizes, pool, ipool, fpool, meta, counters, seen, V, WG, Q, P, ST, ACT, SC, RES, WD,
+          SB, SCc, RESP, T, skey, sfree, scoef, smeta):
     """Implicit steps ``j0 .. K-1`` of one period of one state (see the module docstring).
 
     ``q0, p0``: the base reactions of step ``j0`` (updated in place to those of the step
     handed back); ``s``: the guess (updated in place); ``V[j0]`` the slips at its start.
     Fills rows ``j + 1`` of ``V, WG, Q, P, ST`` and rows ``j`` of ``ACT, SC, RES``; adds the
     dissipation to ``WD[0]``.  Returns the number of steps done (``K`` when the period is
-    complete; otherwise the index of the step handed back to Python).
+    complete; otherwise the index of the step handed back to Python).  ``SB .. smeta``: the
+    state of :mod:`.kernel_shortcut` (:func:`~.kernel_shortcut.state`), for the steps that keep
+    the previous step's assignment.
     """
     n = f.size
     n_steps = QW.shape[0]
     z = np.empty(2 * n)
     q = np.empty(n)
     p = np.empty(n)
+    zn = np.empty(2 * n)
+    qn = np.empty(n)
+    pn = np.empty(n)
     mag = np.empty(n)
     target = np.empty(n, np.int8)
     trial = s.copy()
+    smeta[_ks.VALID] = 0  # no answer of this call yet
+    smeta[_ks.RUN] = 0
     for j in range(j0, n_steps):
         scale = max(_maxabs(QW[j]), _maxabs(PW[j]), _maxabs(q0), _maxabs(p0))
         if scale <= 0.0:
             scale = 1.0
         ft = feas_tol * scale
         dtol = ft / diag
-        trial[:] = s
-        if not _step(trial, K, f, q0, p0, n, ft, dtol, max_iter, mult, keys, hashes, offs,
-                     sizes, pool, ipool, fpool, meta, counters, seen, z, q, p, mag, target):
-            return j
+        short = False
+        if j > j0 and _ks.usable(s, skey, smeta):
+            c = SCc[j]
+            _ks.advance(c, z, q, p, RESP, zn, qn, pn)
+            if (_ks.equation_residual(qn, pn, sfree, scoef, smeta) <= EQ_TOL * ft
+                    and _violated(s, zn, qn, pn, f, ft, dtol, n, mag, target) <= 1.0):
+                short = True
+                z[:] = zn
+                q[:] = qn
+                p[:] = pn
+                _ks.commit(c, RESP, T)
+                counters[C_ITER] += 1
+                counters[C_HITS] += 1
+                counters[C_SHORT] += 1
+        if not short:
+            smeta[_ks.VALID] = 0
+            trial[:] = s
+            it0 = counters[C_ITER]
+            if not _step(trial, K, f, q0, p0, n, ft, dtol, max_iter, mult, keys, hashes, offs,
+                         sizes, pool, ipool, fpool, meta, counters, seen, z, q, p, mag, target):
+                return j
+            smeta[_ks.RUN] = smeta[_ks.RUN] + 1 if counters[C_ITER] - it0 == 1 else 0
+            s[:] = trial
+            if (smeta[_ks.ENABLED] and smeta[_ks.RUN] >= _ks.PERSIST and j + 1 < n_steps
+                    and _ks.any_free(s)):
+                _ks.build(s, z, K, f, n, mult, keys, hashes, offs, sizes, pool, ipool, fpool,
+                          meta, SB, RESP, T, skey, sfree, scoef, smeta)
         counters[C_STEPS] += 1
-        s[:] = trial
         comp = 0.0
         wd = 0.0
         for i in range(n):
@@ -290,11 +324,16 @@ def march(K, f, diag, QW, PW, j0, q0, p0, s, feas_tol, max_iter, mult, keys, has
             for i in range(n):
                 q0[i] = q[i] + QW[j + 1, i] - QW[j, i]
                 p0[i] = p[i] + PW[j + 1, i] - PW[j, i]
-            for i in range(n):
-                w = z[n + i]
-                if w != 0.0:
-                    row = K[n + i]
-                    for k in range(n):
-                        q0[k] -= w * row[k]
-                        p0[k] -= w * row[n + k]
+            if smeta[_ks.VALID]:  # the gaps' reactions kept by the shortcut
+                for i in range(n):
+                    q0[i] -= T[i]
+                    p0[i] -= T[n + i]
+            else:
+                for i in range(n):
+                    w = z[n + i]
+                    if w != 0.0:
+                        row = K[n + i]
+                        for k in range(n):
+                            q0[k] -= w * row[k]
+                            p0[k] -= w * row[n + k]
     return n_steps

@@ -1,0 +1,115 @@
+"""Steps that keep the previous step's assignment by the kept responses
+(``shakedown.evolution.kernel_shortcut``) against the Python step and against the kernel's
+general solve: the basis of the period's increments, and whole runs with persistent slip and
+persistent separation (the gaps' reactions carried from step to step)."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+import shakedown as sd
+from shakedown.evolution import kernel, kernel_shortcut
+from shakedown.evolution.complementarity import FEAS_TOL, StepSolver
+
+pytestmark = pytest.mark.skipif(not kernel.HAVE_KERNEL, reason="numba kernel not available")
+
+
+def test_increment_basis_and_its_representation():
+    rng = np.random.default_rng(0)
+    n, steps = 7, 48
+    t = np.arange(steps)[:, None] / steps * 2 * np.pi
+    a, b, c, d = (rng.standard_normal((1, n)) for _ in range(4))
+    qw = 0.3 + np.cos(t) * a + np.sin(t) * b
+    pw = 1.0 + np.cos(t) * c
+    SB, SCc, RESP, T, key, free, coef, meta = kernel_shortcut.state(n, qw, pw)
+    assert SB.shape == (2, 2 * n) and meta[kernel_shortcut.ENABLED] == 1
+    np.testing.assert_allclose(SB @ SB.T, np.eye(2), atol=1e-14)
+    D = np.hstack([np.diff(qw, axis=0), np.diff(pw, axis=0)])
+    np.testing.assert_allclose(SCc[1:] @ SB, D, rtol=0, atol=1e-14 * np.abs(D).max())
+    assert RESP.shape == (3, 2, 2 * n) and T.shape == (2 * n,)
+    # two harmonics: four directions
+    qw2 = qw + np.cos(2 * t) * d + np.sin(2 * t) * c
+    assert kernel_shortcut.state(n, qw2, pw)[0].shape[0] == 4
+    # no increments: nothing to keep, still enabled (the steps only carry the answer over)
+    z = kernel_shortcut.state(n, np.ones((steps, n)), np.ones((steps, n)))
+    assert z[0].shape == (0, 2 * n) and z[-1][kernel_shortcut.ENABLED] == 1
+    # a sampled record spans more than MAX_RANK directions: off
+    rec = kernel_shortcut.state(n, rng.standard_normal((steps, n)),
+                                rng.standard_normal((steps, n)))
+    assert rec[-1][kernel_shortcut.ENABLED] == 0
+    # a small but real direction (1e-9 of the largest) is below the rank threshold: it would be
+    # dropped, so the representation check turns the shortcut off instead
+    tiny = kernel_shortcut.state(n, qw + 1e-9 * np.cos(3 * t) * d, pw)
+    assert tiny[-1][kernel_shortcut.ENABLED] == 0
+    # extremes: forces near overflow keep their basis; increments that overflow turn it off,
+    # silently (the general path reports the overflow)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        huge = kernel_shortcut.state(n, 1e300 * qw, pw)
+        assert huge[0].shape[0] == 2 and huge[-1][kernel_shortcut.ENABLED] == 1
+        alt = 1.5e308 * (-1.0) ** np.arange(steps)[:, None] * np.ones((1, n))
+        over = kernel_shortcut.state(n, alt, pw)  # differences 3e308: inf
+        assert over[-1][kernel_shortcut.ENABLED] == 0
+
+
+def persistent_problem(seed, n=12):
+    """Strongly loaded nodes that slip over long stretches of the period, two nodes kept open
+    by a tensile normal preload (gaps that change with the load), 256 steps per period."""
+    rng = np.random.default_rng(seed)
+    M = rng.normal(size=(2 * n, 2 * n))
+    K = M @ M.T + n * np.eye(2 * n)
+    s = sd.DiscreteSystem(K[:n, :n], K[:n, n:], K[n:, n:], friction=1.0)
+    s = s.with_friction(0.5 * min(s.critical_friction().value, 2.0))
+    f = float(s.friction.max())
+    p0 = np.full(n, 1.0)
+    p0[:2] = -0.6  # open all period (|p_cos| < 0.6)
+    qc = 3.0 * f * rng.normal(size=n)
+    load = sd.LoadCycle.from_harmonics(0.1 * rng.normal(size=n), p0, q_cos=qc,
+                                       p_cos=0.3 * rng.normal(size=n), q_sin=0.5 * qc)
+    return s, load
+
+
+@pytest.mark.parametrize("seed", range(4))
+@pytest.mark.parametrize("lam", [0.7, 1.5])
+def test_shortcut_runs_equal_python_steps(seed, lam):
+    s, load = persistent_problem(seed)
+    kw = dict(steps_per_cycle=256, max_cycles=30, tol=1e-10)
+    fast = StepSolver(s)
+    c0 = fast.kernel_cache.counters.copy()
+    a = sd.solve_cycles(s, load, lam, solver=fast, **kw)
+    b = sd.solve_cycles(s, load, lam, solver=StepSolver(s, kernel=False), **kw)
+    d = fast.kernel_cache.counters - c0
+    assert d[kernel.C_SHORT] > 0.2 * d[kernel.C_STEPS], d  # the path is exercised
+    assert np.any(a.final_gap > 0)  # with gaps carried over
+    assert a.status == b.status and a.n_cycles == b.n_cycles
+    W = a.force_scale ** 2 / s.A.diagonal().min()
+    np.testing.assert_allclose(a.dissipation, b.dissipation, rtol=0, atol=1e-9 * W)
+    tol = 10 * FEAS_TOL * a.force_scale / s.A.diagonal().min()
+    np.testing.assert_allclose(a.final_slip, b.final_slip, rtol=0, atol=tol)
+    np.testing.assert_allclose(a.final_gap, b.final_gap, rtol=0, atol=tol)
+    np.testing.assert_array_equal(a.stuck_nodes, b.stuck_nodes)
+    assert a.max_residual <= FEAS_TOL
+
+
+def test_shortcut_reactions_equal_a_fresh_product():
+    """Over a period with the shortcut, each step's reactions equal ``q_w + K z`` recomputed
+    from its slips and gaps (the accumulated responses do not drift)."""
+    s, load = persistent_problem(1)
+    fast = StepSolver(s)
+    run = sd.solve_cycles(s, load, 1.0, steps_per_cycle=256, max_cycles=6, solver=fast,
+                          record_history=True)
+    assert fast.kernel_cache.counters[kernel.C_SHORT] > 100
+    n = s.n_nodes
+    tab = run.history
+    last = tab[tab["t"] >= tab["t"].max() - 1 + 1e-9]
+    times = np.unique(last["t"].to_numpy())
+    qw, pw = load.evaluate(times % 1.0, 1.0)
+    worst = 0.0
+    for i, t in enumerate(times):
+        rows = last[last["t"] == t].drop_duplicates("node", keep="last").sort_values("node")
+        v, w = rows["slip"].to_numpy(float), rows["gap"].to_numpy(float)
+        r = s.K @ np.concatenate([v, w])
+        worst = max(worst, np.abs(rows["q"].to_numpy(float) - qw[i] - r[:n]).max(),
+                    np.abs(rows["p"].to_numpy(float) - pw[i] - r[n:]).max())
+    assert worst <= 1e-9 * run.force_scale
