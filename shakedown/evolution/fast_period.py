@@ -43,6 +43,19 @@ class KernelCache:
         self.seen = np.zeros((max_iter + 1, n), np.int8)
         rng = np.random.default_rng(20261123)
         self.mult = rng.integers(1, 2**63 - 1, size=n, dtype=np.int64).astype(np.uint64) | 1
+        self._shortcut = None
+
+    def shortcut_state(self, qw: np.ndarray, pw: np.ndarray):
+        """:func:`.kernel_shortcut.state` of a period's welded reactions, kept for the next
+        periods with the same ``qw, pw`` (its basis costs ~0.3 ms at N = 100, a fifth of a
+        period there)."""
+        c = self._shortcut
+        if (c is not None and c[0].shape == qw.shape and np.array_equal(c[0], qw)
+                and np.array_equal(c[1], pw)):
+            return c[2]
+        st = _ks.state(self.n, qw, pw)
+        self._shortcut = (qw.copy(), pw.copy(), st)
+        return st
 
 
 def usable(solver) -> bool:
@@ -75,7 +88,7 @@ def run_period(solver, qw, pw, v0, guess, V, Wg, Q, P, st, act, scales, res, sta
     j = 0
     K, f = _readonly(solver.K), _readonly(solver.f)
     qw, pw = np.ascontiguousarray(qw), np.ascontiguousarray(pw)
-    sc = _ks.state(n, qw, pw)
+    sc = kc.shortcut_state(qw, pw)
     while j < n_steps:
         done = _k.march(K, f, solver.diag, qw, pw, j, q0, p0, s, solver.feas_tol,
                         solver.max_iter, kc.mult, kc.keys, kc.hashes, kc.offs, kc.sizes,
