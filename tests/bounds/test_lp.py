@@ -129,13 +129,9 @@ def test_degenerate_vertex_basis_skips_dependent_rows():
 
 
 def _tensile_lp():
-    import sys
-    from pathlib import Path
+    from test_basis_lp import _tensile_problem
 
     from shakedown.bounds import extreme_constraints
-
-    sys.path.insert(0, str(Path(__file__).parent))
-    from test_basis_lp import _tensile_problem
 
     system, load = _tensile_problem(20, 4)
     cs = extreme_constraints(system, load)

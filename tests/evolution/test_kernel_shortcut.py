@@ -7,6 +7,7 @@ import warnings
 
 import numpy as np
 import pytest
+from test_kernel import assert_same_run  # (this folder: kernel against Python runs)
 
 import shakedown as sd
 from shakedown.evolution import kernel, kernel_shortcut
@@ -82,13 +83,7 @@ def test_shortcut_runs_equal_python_steps(seed, lam):
     d = fast.kernel_cache.counters - c0
     assert d[kernel.C_SHORT] > 0.2 * d[kernel.C_STEPS], d  # the path is exercised
     assert np.any(a.final_gap > 0)  # with gaps carried over
-    assert a.status == b.status and a.n_cycles == b.n_cycles
-    W = a.force_scale ** 2 / s.A.diagonal().min()
-    np.testing.assert_allclose(a.dissipation, b.dissipation, rtol=0, atol=1e-9 * W)
-    tol = 10 * FEAS_TOL * a.force_scale / s.A.diagonal().min()
-    np.testing.assert_allclose(a.final_slip, b.final_slip, rtol=0, atol=tol)
-    np.testing.assert_allclose(a.final_gap, b.final_gap, rtol=0, atol=tol)
-    np.testing.assert_array_equal(a.stuck_nodes, b.stuck_nodes)
+    assert_same_run(a, b, s)
     assert a.max_residual <= FEAS_TOL
 
 

@@ -8,10 +8,11 @@ import pickle
 import numpy as np
 import pytest
 import scipy.sparse as sp
+from test_sparse_step import assert_same_run  # (this folder: the same comparison of two runs)
 
 import shakedown as sd
 from shakedown.evolution import schur_step
-from shakedown.evolution.complementarity import FEAS_TOL, StepSolver
+from shakedown.evolution.complementarity import StepSolver
 from shakedown.model.errors import InputError, NotPositiveDefiniteError, NotSymmetricError
 from shakedown.model.schur import SchurStiffness
 from shakedown.model.uncondensed import UncondensedSystem
@@ -37,19 +38,6 @@ def pair(n, m, seed, friction=None, scale=1.0):
     d = sd.DiscreteSystem(K[:n, :n], K[:n, n:], K[n:, n:], 1.0)
     f = friction if friction is not None else 0.5 * min(d.critical_friction().value, 1.6)
     return UncondensedSystem(Kz, n, f), d.with_friction(f)
-
-
-def assert_same_run(a, b, d):
-    assert a.status == b.status
-    assert a.n_cycles == b.n_cycles and a.period == b.period
-    kmin = d.A.diagonal().min()
-    W = a.force_scale ** 2 / kmin
-    np.testing.assert_allclose(a.dissipation, b.dissipation, rtol=0, atol=1e-9 * W)
-    tol = 10 * FEAS_TOL * a.force_scale / kmin
-    np.testing.assert_allclose(a.final_slip, b.final_slip, rtol=0, atol=tol)
-    np.testing.assert_allclose(a.final_gap, b.final_gap, rtol=0, atol=tol)
-    np.testing.assert_array_equal(a.stuck_nodes, b.stuck_nodes)
-    assert a.step_statuses == b.step_statuses
 
 
 # ---------------------------------------------------------------------- the operator
