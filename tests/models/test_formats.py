@@ -175,6 +175,56 @@ def test_condense_refuses_a_floating_body_and_bad_dofs():
         condense_stiffness(bad, [0], [1], fixed_dofs=[3])
 
 
+def test_uncondensed_stiffness_equals_the_condensed_one(tmp_path):
+    """``uncondensed_stiffness`` (K_z signed and reordered, never condensed) against
+    ``condense_stiffness`` of the same export: the same reduced stiffness, welded reactions,
+    bounds and run; the scene key ``sparse = true`` with ``stiffness_file`` builds it."""
+    from shakedown.model.uncondensed import UncondensedSystem
+    from shakedown.models.formats import uncondensed_stiffness
+
+    Kfull = read_matrix(MODELS / "square_full_K.mtx", sparse=True)
+    f = read_vector(MODELS / "square_force.mtx")
+    args = ([1, 11, 21, 31, 41], [2, 12, 22, 32, 42])
+    kw = dict(fixed_dofs=[9, 10, 19, 20, 29, 30, 39, 40, 49, 50], normal_sign=-1, dof_base=1)
+    cs = condense_stiffness(Kfull, *args, **kw)
+    us = uncondensed_stiffness(Kfull, *args, **kw)
+    system = us.system(0.5)
+    assert isinstance(system, UncondensedSystem) and us.K is None and us.n_nodes == 5
+    scale = np.abs(cs.K).max()
+    np.testing.assert_allclose(system.K.toarray(), cs.K, rtol=0, atol=1e-13 * scale)
+    np.testing.assert_allclose(np.hstack(us.blocks), np.hstack(cs.blocks), rtol=0,
+                               atol=1e-13 * scale)
+    np.testing.assert_allclose(us.welded(f), cs.welded(f), rtol=0,
+                               atol=1e-13 * np.abs(f).sum())
+    # the springs: tangential k1 k2 / (k1 + k2), the coupling's sign (MODEL.md s.1 frame)
+    sp_ = uncondensed_stiffness(_spring_model(), [0], [1], fixed_dofs=[3]).system(0.3)
+    np.testing.assert_allclose(sp_.K.toarray(), condense_stiffness(
+        _spring_model(), [0], [1], fixed_dofs=[3]).K, rtol=1e-14)
+    # a body that is not held: refused, naming the stiffness
+    with pytest.raises(sd.InputError, match="Kz"):
+        uncondensed_stiffness(_spring_model(k1=0.0), [0], [1])
+    # the scene route
+    scene = (SCENES / "square_full_stiffness.toml").read_text().replace(
+        "friction = 0.5", "friction = 0.5\nsparse = true").replace("../models/",
+                                                                  str(MODELS) + "/")
+    (tmp_path / "s.toml").write_text(scene)
+    s2, load2, m2 = build(load_scene(tmp_path / "s.toml"))
+    s1, load1, _ = _built("square_full_stiffness")
+    assert isinstance(s2, UncondensedSystem) and m2.K is None
+    np.testing.assert_allclose(load2.q0, load1.q0, rtol=0, atol=1e-13 * np.abs(load1.q0).max())
+    b1, b2 = sd.shakedown_bounds(s1, load1), sd.shakedown_bounds(s2, load2)
+    assert b2.lam1 == pytest.approx(b1.lam1, rel=1e-9)
+    assert b2.lam2 == pytest.approx(b1.lam2, rel=1e-9)
+    with pytest.raises(sd.SceneError, match="two sources"):
+        (tmp_path / "t.toml").write_text(scene.replace("sparse = true",
+                                                       "sparse = true\nA = [[1.0]]"))
+        build(load_scene(tmp_path / "t.toml"))
+    r1 = sd.solve_cycles(s1, load1, 1.1 * b1.lam2, steps_per_cycle=32, max_cycles=40)
+    r2 = sd.solve_cycles(s2, load2, 1.1 * b1.lam2, steps_per_cycle=32, max_cycles=40)
+    assert r1.status == r2.status and r1.n_cycles == r2.n_cycles
+    assert r2.steady_dissipation == pytest.approx(r1.steady_dissipation, rel=1e-8)
+
+
 # ---------------------------------------------------------------- load records
 def test_record_gives_the_harmonic_load_within_its_sampling_error():
     cycle, fit = read_load_record(MODELS / "two_node_record.csv", 0.02, n_samples=256)

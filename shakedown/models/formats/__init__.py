@@ -4,7 +4,8 @@
   CSV (:mod:`.readers`);
 * :func:`condense_stiffness`: a full stiffness with named contact DOFs (Abaqus, ANSYS,
   Code_Aster exports) condensed onto the contact nodes, with its sign conventions
-  (:mod:`.stiffness`);
+  (:mod:`.stiffness`); :func:`uncondensed_stiffness` keeps it sparse instead (many contact
+  nodes);
 * :func:`read_load_record`: a measured load history (CSV, any sampling) resampled to one period
   with a stated error (:mod:`.records`).
 
@@ -15,7 +16,13 @@ boundaries).  The scene builders ``matrices`` and ``fe`` use these readers
 
 from .readers import SUFFIXES, ModelFileError, read_matrix, read_vector
 from .records import RecordFit, read_load_record
-from .stiffness import CondensedStiffness, condense_stiffness
+from .stiffness import (
+    CondensedStiffness,
+    UncondensedStiffness,
+    condense_stiffness,
+    uncondensed_stiffness,
+)
 
 __all__ = ["SUFFIXES", "ModelFileError", "read_matrix", "read_vector", "RecordFit",
-           "read_load_record", "CondensedStiffness", "condense_stiffness"]
+           "read_load_record", "CondensedStiffness", "condense_stiffness",
+           "UncondensedStiffness", "uncondensed_stiffness"]

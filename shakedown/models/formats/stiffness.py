@@ -29,6 +29,8 @@ the Schur complement ``S = K_cc - K_ci K_ii^-1 K_ic``, the equilibrium ``K u = f
 
 so the reduced stiffness is ``T S T`` and the welded reactions of an external force vector
 ``f`` are ``-T g_c``.  ``fixed_dofs`` (held at zero: supports) are removed before condensing.
+:func:`uncondensed_stiffness` keeps ``K_z = D K[o, o] D`` (``o = (c, i)``, ``D = diag(T, I)``)
+instead, whose Schur complement onto its first ``2N`` rows is the same ``T S T``.
 """
 
 from __future__ import annotations
@@ -104,6 +106,33 @@ class CondensedStiffness:
         r = -self.signs * g
         n = self.n_nodes
         return r[:n], r[n:]
+
+
+@dataclass(frozen=True)
+class UncondensedStiffness(CondensedStiffness):
+    """A full stiffness kept uncondensed (:func:`uncondensed_stiffness`): ``K`` is ``None``;
+    ``Kz`` the sparse ``K_z`` in the order (slips, gaps, interior DOFs) with the signs of
+    ``T``; :meth:`system` gives the frictional system, :meth:`welded` the welded reactions."""
+
+    _system: object = None
+
+    @property
+    def n_nodes(self) -> int:
+        return self.contact_dofs.size // 2
+
+    @property
+    def Kz(self) -> sp.csr_matrix:
+        return self._system.Kz
+
+    @property
+    def blocks(self):
+        """``(A, B, C)`` (dense: the condensation, ``2N`` sparse solves)."""
+        d = self._system.to_dense()
+        return d.A, d.B, d.C
+
+    def system(self, friction):
+        """The :class:`~shakedown.model.uncondensed.UncondensedSystem` with ``friction``."""
+        return self._system.with_friction(friction)
 
 
 def _dofs(name, value, n_full, base):
@@ -196,6 +225,58 @@ def condense_stiffness(K, tangential_dofs, normal_dofs, *, fixed_dofs=(), tangen
         or a singular interior block (the body is not held without its contact nodes: list
         its supports in ``fixed_dofs``).
     """
+    Ks, c, signs, interior = _contact_layout(K, tangential_dofs, normal_dofs, fixed_dofs,
+                                             tangential_sign, normal_sign, dof_base,
+                                             symmetry_rtol)
+    Kcc = Ks[c][:, c].toarray()
+    factor = Kci = None
+    if interior.size:
+        Kci = Ks[c][:, interior].tocsr()
+        factor = _factorize(Ks[interior][:, interior].tocsc(), Kci, interior.size)
+        Kcc = Kcc - factor.schur_correction(Kci.T)
+    S = 0.5 * (Kcc + Kcc.T)
+    Kred = signs[:, None] * S * signs[None, :]
+    return CondensedStiffness(K=Kred, contact_dofs=c, signs=signs, interior_dofs=interior,
+                              _factor=factor, _Kci=Kci)
+
+
+def uncondensed_stiffness(K, tangential_dofs, normal_dofs, *, fixed_dofs=(), tangential_sign=1,
+                          normal_sign=1, dof_base: int = 0, symmetry_rtol: float = 1e-8
+                          ) -> UncondensedStiffness:
+    """The same as :func:`condense_stiffness` without condensing: ``K`` reordered and signed
+    into ``K_z`` (contact slips, gaps, then the interior DOFs) for many contact nodes; its
+    :meth:`UncondensedStiffness.system` never forms the dense reduced stiffness
+    (:class:`~shakedown.model.uncondensed.UncondensedSystem`).  Arguments and errors as
+    :func:`condense_stiffness` (a body that is not held: ``NotPositiveDefiniteError``).
+    """
+    from ...model.uncondensed import UncondensedSystem
+
+    Ks, c, signs, interior = _contact_layout(K, tangential_dofs, normal_dofs, fixed_dofs,
+                                             tangential_sign, normal_sign, dof_base,
+                                             symmetry_rtol)
+    order = np.concatenate([c, interior])
+    D = sp.diags(np.concatenate([signs, np.ones(interior.size)]))
+    Kz = (D @ Ks[order][:, order] @ D).tocsr()
+    system = UncondensedSystem(Kz, c.size // 2, 0.0, symmetry_rtol=symmetry_rtol)
+    return UncondensedStiffness(K=None, contact_dofs=c, signs=signs, interior_dofs=interior,
+                                _factor=_InteriorSolve(system.K),
+                                _Kci=Ks[c][:, interior].tocsr() if interior.size else None,
+                                _system=system)
+
+
+class _InteriorSolve:
+    """``K_ii^-1`` of an uncondensed stiffness (for :meth:`CondensedStiffness.welded`)."""
+
+    def __init__(self, schur):
+        self.schur = schur
+
+    def solve(self, b):
+        return self.schur.solve_interior(b)
+
+
+def _contact_layout(K, tangential_dofs, normal_dofs, fixed_dofs, tangential_sign, normal_sign,
+                    dof_base, symmetry_rtol):
+    """Checked ``(K as CSR, contact DOFs (t then n), signs (s_t, -s_n), interior DOFs)``."""
     if dof_base not in (0, 1):
         raise InputError(f"dof_base must be 0 or 1; got {dof_base!r}")
     Ks = sp.csr_matrix(K, dtype=float) if not sp.issparse(K) else K.tocsr().astype(float)
@@ -226,13 +307,4 @@ def condense_stiffness(K, tangential_dofs, normal_dofs, *, fixed_dofs=(), tangen
     signs = np.concatenate([_signs("tangential_sign", tangential_sign, n),
                             -_signs("normal_sign", normal_sign, n)])
     interior = np.setdiff1d(np.arange(n_full), np.concatenate([c, fixed]))
-    Kcc = Ks[c][:, c].toarray()
-    factor = Kci = None
-    if interior.size:
-        Kci = Ks[c][:, interior].tocsr()
-        factor = _factorize(Ks[interior][:, interior].tocsc(), Kci, interior.size)
-        Kcc = Kcc - factor.schur_correction(Kci.T)
-    S = 0.5 * (Kcc + Kcc.T)
-    Kred = signs[:, None] * S * signs[None, :]
-    return CondensedStiffness(K=Kred, contact_dofs=c, signs=signs, interior_dofs=interior,
-                              _factor=factor, _Kci=Kci)
+    return Ks, c, signs, interior

@@ -18,8 +18,9 @@
     ``friction`` : number or list of N (overrides the file's); ``symmetry_rtol`` : number.
     ``sparse`` : true keeps ``K_file`` / ``A_file``, ``B_file``, ``C_file`` (and the arrays of
     ``file``) as ``scipy.sparse`` matrices: the system is then sparse and the cyclic runs and
-    the bounds use it without densifying (not with ``stiffness_file``: a condensed stiffness
-    is dense).
+    the bounds use it without densifying; with ``stiffness_file`` the stiffness is kept
+    uncondensed (:func:`~shakedown.models.formats.uncondensed_stiffness`: the dense reduced
+    stiffness is never formed, for thousands of contact nodes).
 ``[load]`` keys
     ``q0``, ``p0`` : lists of N [force]; then either harmonics ``q_cos``, ``q_sin``, ``p_cos``,
     ``p_sin`` (lists of N or of lists of N) or samples ``q1``, ``p1`` (lists of lists of N);
@@ -45,7 +46,14 @@ from ...model.errors import InputError, SceneError
 from ...model.loading import LoadCycle
 from ...model.sparse import abs_max
 from ...model.system import SYMMETRY_RTOL, DiscreteSystem
-from ...models.formats import condense_stiffness, read_load_record, read_matrix, read_vector
+from ...models.formats import (
+    UncondensedStiffness,
+    condense_stiffness,
+    read_load_record,
+    read_matrix,
+    read_vector,
+    uncondensed_stiffness,
+)
 from ...models.formats.readers import container_names, read_array
 
 STIFFNESS_KEYS = ("stiffness_file", "tangential_dofs", "normal_dofs", "fixed_dofs",
@@ -153,9 +161,6 @@ def _model_data(model: dict, scene_dir: Path):
     sparse = model.get("sparse", False)
     if not isinstance(sparse, bool):
         raise SceneError(f"[model] key 'sparse' = {sparse!r} must be true or false")
-    if sparse and "stiffness_file" in model:
-        raise SceneError("[model] sparse = true does not apply to 'stiffness_file': the "
-                         "condensed stiffness on the contact nodes is dense")
     if "file" in model:
         data.update(_container(scene_dir / str(model["file"]), "model", names))
         if "K" in data and "A" not in data:
@@ -174,11 +179,13 @@ def _model_data(model: dict, scene_dir: Path):
                                  "counted from dof_base = 1)")
         Kfull = read_matrix(scene_dir / str(model["stiffness_file"]), names.get("stiffness"),
                             sparse=True)
-        condensed = condense_stiffness(
+        make = uncondensed_stiffness if sparse else condense_stiffness
+        condensed = make(
             Kfull, model["tangential_dofs"], model["normal_dofs"],
             fixed_dofs=model.get("fixed_dofs", []), tangential_sign=model.get("tangential_sign", 1),
             normal_sign=model.get("normal_sign", 1), dof_base=int(model.get("dof_base", 1)))
-        data.update(dict(zip("ABC", condensed.blocks, strict=True)))
+        if not sparse:
+            data.update(dict(zip("ABC", condensed.blocks, strict=True)))
     return data, condensed
 
 
@@ -199,6 +206,19 @@ def build(model: dict, load: dict, scene_dir: Path):
     for key in ("A", "B", "C", "friction"):
         if key in model:
             data[key] = _array("model", key, model[key])
+    names = _variables(model)
+    if isinstance(condensed, UncondensedStiffness):  # stiffness_file with sparse = true
+        given = [k for k in ("A", "B", "C") if k in model]
+        if given:
+            raise SceneError(f"[model] keys {', '.join(given)} and 'stiffness_file' are two "
+                             "sources of the stiffness; give one")
+        if "friction" not in data:
+            raise SceneError("[model] key 'friction' is missing (a number >= 0 or a list of N)")
+        try:
+            system = condensed.system(data["friction"])
+        except InputError as exc:
+            raise SceneError(f"[model] {exc}") from None
+        return system, build_load(load, scene_dir, system.n_nodes, condensed, names), condensed
     if model.get("sparse") is True:  # every block sparse, whatever its source
         for key in ("A", "B", "C"):
             if key in data and not sp.issparse(data[key]):
@@ -223,7 +243,6 @@ def build(model: dict, load: dict, scene_dir: Path):
         system = DiscreteSystem(data["A"], data["B"], data["C"], data["friction"], **kwargs)
     except InputError as exc:
         raise SceneError(f"[model] {exc}") from None
-    names = _variables(model)
     return system, build_load(load, scene_dir, system.n_nodes, condensed, names), condensed
 
 
