@@ -27,7 +27,6 @@ import warnings
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 from scipy.linalg.lapack import dgecon
 
 from . import kernel as _kernel
@@ -72,11 +71,7 @@ class FactorCache:
         n = self.n
         cols = np.asarray(cols, int)
         if self.sparse and not self.schur:
-            out = self.K[np.concatenate([jv, n + jw])][:, cols]
-            if jv.size:
-                top = out[:jv.size] + sp.diags(coef) @ self.K[n + jv][:, cols]
-                out = sp.vstack([top, out[jv.size:]], format="csr")
-            return out
+            return schur_step.assignment_rows(self.K, n, coef, jv, jw, cols)
         out = self.K[np.ix_(np.concatenate([jv, n + jw]), cols)]  # cost ~ the output's size
         if jv.size:
             out[:jv.size] += coef[:, None] * self.K[np.ix_(n + jv, cols)]
@@ -111,16 +106,10 @@ class FactorCache:
         largest (a cheap proxy for a reciprocal condition number; every answer is verified
         afterwards like the dense LU's).
         """
-        try:
-            lu = spla.splu(Ms.tocsc())
-        except RuntimeError:  # exactly singular
-            lu = None
+        lu = schur_step.pivoted_lu(Ms)
         self.totals["factorizations"] += 1
         self._counters["factorizations"] += 1
         if lu is None:
-            return None
-        piv = np.abs(lu.U.diagonal())
-        if not np.all(np.isfinite(piv)) or piv.min() < 1e-14 * piv.max():
             return None
         nbytes = 12 * (lu.L.nnz + lu.U.nnz) + 8 * Ms.shape[0]
         return self._store(_Factor(key, s.copy(), free, coef, jv, jw, lu, nbytes))

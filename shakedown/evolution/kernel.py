@@ -324,16 +324,9 @@ def march(K, f, diag, QW, PW, j0, q0, p0, s, feas_tol, max_iter, mult, keys, has
             for i in range(n):
                 q0[i] = q[i] + QW[j + 1, i] - QW[j, i]
                 p0[i] = p[i] + PW[j + 1, i] - PW[j, i]
-            if smeta[_ks.VALID]:  # the gaps' reactions kept by the shortcut
-                for i in range(n):
-                    q0[i] -= T[i]
-                    p0[i] -= T[n + i]
-            else:
-                for i in range(n):
-                    w = z[n + i]
-                    if w != 0.0:
-                        row = K[n + i]
-                        for k in range(n):
-                            q0[k] -= w * row[k]
-                            p0[k] -= w * row[n + k]
+            if not smeta[_ks.VALID]:  # else T holds them (kept by the shortcut)
+                _ks.gap_reactions(z, K, n, T)
+            for i in range(n):
+                q0[i] -= T[i]
+                p0[i] -= T[n + i]
     return n_steps

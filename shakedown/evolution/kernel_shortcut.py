@@ -103,8 +103,8 @@ def build(s, z, K, f, n, mult, keys, hashes, offs, sizes, pool, ipool, fpool, me
             return False
         RESP[1, l, :n] = qq
         RESP[1, l, n:] = pp
-        _gap_reactions(RESP[0, l], K, n, RESP[2, l])
-    _gap_reactions(z, K, n, T)
+        gap_reactions(RESP[0, l], K, n, RESP[2, l])
+    gap_reactions(z, K, n, T)
     m = free.size
     sfree[:m] = free
     scoef[:m] = coef
@@ -115,7 +115,7 @@ def build(s, z, K, f, n, mult, keys, hashes, offs, sizes, pool, ipool, fpool, me
 
 
 @njit(cache=True)
-def _gap_reactions(z, K, n, out):
+def gap_reactions(z, K, n, out):
     """``out = K[:, n:] z[n:]`` over the non-zero gaps (rows of the symmetric ``K``)."""
     out[:] = 0.0
     for i in range(n):

@@ -22,7 +22,8 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-#: Pivot threshold of the singularity test (relative to the largest pivot), as the sparse path.
+#: Pivot threshold of the singularity test of a sparse assignment factor (relative to the
+#: largest pivot), here and in the sparse path of :mod:`.factors`.
 PIVOT_RTOL = 1e-14
 
 
@@ -52,23 +53,42 @@ class AugmentedLU:
                 + 12 * self.contact_rows.nnz)
 
 
+def assignment_rows(M, n, coef, jv, jw, cols=None):
+    """The assignment's equation rows of a sparse ``M`` whose first ``2N`` rows are those of
+    ``(q, p)``: ``q_j + c_j p_j`` for the slipping or open nodes ``jv``, then ``p_j`` for the
+    open ones ``jw`` (CSR; at ``cols`` when given)."""
+    out = M[np.concatenate([jv, n + jw])]
+    low = M[n + jv]
+    if cols is not None:
+        out, low = out[:, cols], low[:, cols]
+    if jv.size:
+        out = sp.vstack([out[:jv.size] + sp.diags(coef) @ low, out[jv.size:]], format="csr")
+    return out
+
+
+def pivoted_lu(M):
+    """SuperLU of a sparse square ``M``; ``None`` when it is exactly singular or a pivot is
+    below :data:`PIVOT_RTOL` of the largest (a cheap proxy for a reciprocal condition number;
+    every answer is verified afterwards)."""
+    try:
+        lu = spla.splu(sp.csc_matrix(M))
+    except RuntimeError:  # exactly singular
+        return None
+    piv = np.abs(lu.U.diagonal())
+    if not np.all(np.isfinite(piv)) or piv.min() < PIVOT_RTOL * piv.max():
+        return None
+    return lu
+
+
 def factor(K, free, coef, jv, jw):
     """The :class:`AugmentedLU` of an assignment (``free``, ``coef``, ``jv``, ``jw`` as in
     :meth:`.factors.FactorCache._layout`) of the :class:`~shakedown.model.schur.SchurStiffness`
     ``K``; ``None`` if (nearly) singular."""
     n = K.n
     Kz = K.Kz
-    rows = Kz[np.concatenate([jv, n + jw])]
-    if jv.size:
-        top = rows[:jv.size] + sp.diags(coef) @ Kz[n + jv]
-        rows = sp.vstack([top, rows[jv.size:]], format="csr")
+    rows = assignment_rows(Kz, n, coef, jv, jw)
     cols = np.concatenate([free, np.arange(2 * n, Kz.shape[0])])
-    M = sp.vstack([rows, K.interior_rows], format="csc")[:, cols]
-    try:
-        lu = spla.splu(M.tocsc())
-    except RuntimeError:  # exactly singular
-        return None
-    piv = np.abs(lu.U.diagonal())
-    if not np.all(np.isfinite(piv)) or piv.min() < PIVOT_RTOL * piv.max():
+    lu = pivoted_lu(sp.vstack([rows, K.interior_rows], format="csc")[:, cols])
+    if lu is None:
         return None
     return AugmentedLU(lu, free.size, Kz[:2 * n][:, cols].tocsr())

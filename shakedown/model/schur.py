@@ -71,8 +71,7 @@ class SchurStiffness:
         self.Kii = Kz[c:, c:].tocsc()
         self.interior_rows = Kz[c:].tocsr()  # [K_ic, K_ii]: the step's always-free equations
         self._lu = None
-        self._diag = None
-        self._C = None
+        self._diag = self._diag_b = self._C = None
 
     def __getstate__(self):  # the SuperLU factor does not pickle: refactorized on first use
         state = dict(self.__dict__)
@@ -202,7 +201,7 @@ class SchurStiffness:
 
     def block_diagonals(self):
         """``(diag A, diag B, diag C)`` of ``K = [[A, B], [B^T, C]]``, each shape (N,)."""
-        if self._diag is None or not hasattr(self, "_diag_b"):
+        if self._diag_b is None:
             self._diagonals()
         n = self.n
         return self._diag[:n].copy(), self._diag_b.copy(), self._diag[n:].copy()

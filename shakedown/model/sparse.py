@@ -158,15 +158,20 @@ def smallest_schur_eigenvalue(K: sp.spmatrix, n: int, lu=None) -> float:
         S = Kd[:n, :n] - Kd[:n, n:] @ np.linalg.solve(Kd[n:, n:], Kd[n:, :n])
         return float(np.linalg.eigvalsh(0.5 * (S + S.T))[0])
     lu = symmetric_lu(K) if lu is None else lu
-    m = K.shape[0]
+    return float(1.0 / extreme_eigenvalue(leading_block_inverse(lu, n), "LM", 1e-10))
+
+
+def leading_block_inverse(lu, n: int) -> spla.LinearOperator:
+    """The leading ``n x n`` block of ``K^-1`` (the inverse of the Schur complement of ``K``
+    onto its first ``n`` unknowns) as a symmetric operator of solves with ``lu``."""
+    m = lu.shape[0]
 
     def apply(x):
         y = np.zeros(m)
         y[:n] = np.ravel(x)
         return lu.solve(y)[:n]
 
-    inv = spla.LinearOperator((n, n), matvec=apply, dtype=float)
-    return float(1.0 / extreme_eigenvalue(inv, "LM", 1e-10))
+    return spla.LinearOperator((n, n), matvec=apply, rmatvec=apply, dtype=float)
 
 
 def largest_eigenvalue(K: sp.spmatrix) -> float:

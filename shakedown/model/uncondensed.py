@@ -182,18 +182,13 @@ class UncondensedSystem(DiscreteSystem):
 def _check_condition(K: SchurStiffness, lu) -> None:
     """``cond_1(K) <= MAX_CONDITION`` for the condensed ``K`` (Higham's 1-norm estimates of ``K``
     by products and of ``K^-1``, the leading block of ``K_z^-1``, by solves with ``lu``)."""
-    m, big = 2 * K.n, K.Kz.shape[0]
+    m = 2 * K.n
     if m <= 2:
         cond = np.linalg.cond(K.toarray(), 1)
     else:
-        def inv(x):
-            y = np.zeros(big)
-            y[:m] = np.ravel(x)
-            return lu.solve(y)[:m]
-
         op = spla.LinearOperator((m, m), matvec=lambda x: K @ np.ravel(x),
                                  rmatvec=lambda x: K @ np.ravel(x), dtype=float)
-        iop = spla.LinearOperator((m, m), matvec=inv, rmatvec=inv, dtype=float)
+        iop = _sparse.leading_block_inverse(lu, m)
         cond = float(spla.onenormest(op)) * float(spla.onenormest(iop))
     if not np.isfinite(cond) or cond > MAX_CONDITION:
         raise NotPositiveDefiniteError(

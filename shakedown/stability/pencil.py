@@ -26,7 +26,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
-import scipy.sparse as sp
 
 from ..model.errors import InputError, ShapeError
 from ..model.system import SYMMETRY_RTOL
@@ -124,8 +123,8 @@ def as_dynamic_stiffness(source, mass=None):
     if callable(source) and not isinstance(source, np.ndarray):
         return source
     K = source.K if hasattr(source, "K") else source
-    if sp.issparse(K) or hasattr(K, "toarray"):  # the eigenproblems are dense: a sparse or
-        K = K.toarray()  # uncondensed K (2N x 2N) is densified here
+    if hasattr(K, "toarray"):  # the eigenproblems are dense: a sparse or uncondensed K
+        K = K.toarray()  # (2N x 2N) is densified here
     K = real_array("K", K)
     if K.ndim != 2 or K.shape[0] != K.shape[1] or K.shape[0] % 2:
         raise ShapeError(f"K must have shape (2N, 2N); got {K.shape}")

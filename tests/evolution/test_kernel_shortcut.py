@@ -108,3 +108,29 @@ def test_shortcut_reactions_equal_a_fresh_product():
         worst = max(worst, np.abs(rows["q"].to_numpy(float) - qw[i] - r[:n]).max(),
                     np.abs(rows["p"].to_numpy(float) - pw[i] - r[n:]).max())
     assert worst <= 1e-9 * run.force_scale
+
+
+@pytest.mark.parametrize("force, length", [(1e6, 1.0), (1.0, 1e-4), (1e-9, 1e3)])
+def test_shortcut_is_unit_free(force, length):
+    """Forces x F, lengths x L (K x F / L): the same steps take the shortcut, slips scale by L,
+    dissipation by F L."""
+    s, load = persistent_problem(2)
+    k = force / length
+    s2 = sd.DiscreteSystem(s.A * k, s.B * k, s.C * k, s.friction)
+    parts = {key: getattr(load, key) * force for key in ("q_cos", "q_sin", "p_cos", "p_sin")
+             if getattr(load, key) is not None}
+    load2 = sd.LoadCycle.from_harmonics(load.q0 * force, load.p0 * force, **parts)
+    kw = dict(steps_per_cycle=256, max_cycles=30, tol=1e-10)
+    counts = []
+    runs = []
+    for system, lc in ((s, load), (s2, load2)):
+        solver = StepSolver(system)
+        runs.append(sd.solve_cycles(system, lc, 1.0, solver=solver, **kw))
+        counts.append(int(solver.kernel_cache.counters[kernel.C_SHORT]))
+    a, b = runs
+    assert counts[0] > 0 and counts[0] == counts[1]
+    assert a.n_cycles == b.n_cycles and a.status == b.status
+    np.testing.assert_allclose(b.final_slip, a.final_slip * length, rtol=1e-7,
+                               atol=1e-9 * length * np.abs(a.final_slip).max())
+    np.testing.assert_allclose(b.dissipation, a.dissipation * force * length, rtol=1e-7,
+                               atol=1e-9 * np.abs(a.dissipation).max() * force * length)

@@ -288,7 +288,12 @@ class CondensedModel:
         w = np.zeros(N) if gap is None else np.asarray(gap, float).reshape(N)
         if load is not None and load not in self.welded:
             raise InputError(f"unknown load case {load!r}; the model has {sorted(self.welded)}")
-        return self._assembled().displacements(np.concatenate([v, w]), load)
+        return self._assembled().displacements(np.concatenate([v, w]), load,
+                                               solve=self._interior_solve())
+
+    def _interior_solve(self):
+        """``K_ii^-1`` for the recovery (``None``: the condensation's factor)."""
+        return None
 
     # ------------------------------------------------------------------ checks / cache
     def _check_rigid(self, allow: bool):

@@ -72,14 +72,8 @@ class UncondensedModel(CondensedModel):
         raise InputError("dynamic_stiffness needs the condensed mass: use "
                          "model.condense(mass=True)")
 
-    def displacements(self, slip=None, gap=None, load=None):
-        N = self.n_nodes
-        v = np.zeros(N) if slip is None else np.asarray(slip, float).reshape(N)
-        w = np.zeros(N) if gap is None else np.asarray(gap, float).reshape(N)
-        if load is not None and load not in self.welded:
-            raise InputError(f"unknown load case {load!r}; the model has {sorted(self.welded)}")
-        return self._assembled().displacements(np.concatenate([v, w]), load,
-                                               solve=self.system.K.solve_interior)
+    def _interior_solve(self):
+        return self.system.K.solve_interior  # (no condensation's factor is formed)
 
     def _to_arrays(self) -> dict:  # pragma: no cover - not cached: assembling is cheap
         raise InputError("an uncondensed model is not cached")
