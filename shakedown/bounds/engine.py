@@ -42,6 +42,7 @@ from .constraints import (
 from .dense_path import solve_dense
 from .highs_path import solve_highs
 from .lp import INF, ReusableLP
+from .outcome import intervals_option as _intervals_option
 from .result import LAM_RTOL, ShakedownBounds
 
 #: What ``only=`` may name.
@@ -210,17 +211,6 @@ def _only(only):
             f"only: unknown quantity {bad[0]!r}; choose from {', '.join(QUANTITIES)}")
     return ("lam1" if "lam1" in wanted else False), "lam_adj" in wanted, \
         "lam_separation" in wanted
-
-
-def _intervals_option(intervals):
-    """``"lam1"``, ``"all"`` or ``False`` from the ``intervals=`` argument."""
-    if intervals is True or intervals == "all":
-        return "all"
-    if intervals is False or intervals is None:
-        return False
-    if intervals == "lam1":
-        return "lam1"
-    raise InputError(f"intervals must be 'lam1', True ('all') or False; got {intervals!r}")
 
 
 def chebyshev_centre(cs: ConstraintSet, lam: float, *, solver: str = "auto"):

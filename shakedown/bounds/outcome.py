@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..model.errors import InputError
 from .lp import LPAnswer
 from .result import LAM_RTOL
 
@@ -77,3 +78,14 @@ def separation_outcome(ans: LPAnswer, lam2: float, n: int, rows: int | None = No
         dmax = float(np.abs(duals).max(initial=0.0))
         sep_nodes = tuple(int(j) for j in np.flatnonzero(np.abs(duals) > 1e-9 * dmax))
     return lam_sep, sep_nodes
+
+
+def intervals_option(intervals):
+    """``"lam1"``, ``"all"`` or ``False`` from the ``intervals=`` argument."""
+    if intervals is True or intervals == "all":
+        return "all"
+    if intervals is False or intervals is None:
+        return False
+    if intervals == "lam1":
+        return "lam1"
+    raise InputError(f"intervals must be 'lam1', True ('all') or False; got {intervals!r}")

@@ -23,7 +23,6 @@ Everything is nondimensional (:mod:`.data`); the bracket is scaled back by the l
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -89,7 +88,6 @@ def melan_lam2(data, *, rtol=BRACKET_RTOL, max_rounds=60, cuts=None) -> MelanOut
     cuts : tuple of (nodes, times), optional
         Starting cuts (default :func:`initial_cuts`).
     """
-    n = data.n_nodes
     nodes, times = initial_cuts(data) if cuts is None else (np.asarray(cuts[0]),
                                                             np.asarray(cuts[1], float))
     u0, tau0 = static_margin(data)

@@ -33,8 +33,8 @@ import numpy as np
 
 from ...model.errors import InputError
 from ..constraints import Scales, family_constraints
-from ..engine import _intervals_option
 from ..highs_path import solve_highs
+from ..outcome import intervals_option
 from ..result import ShakedownBounds
 
 
@@ -76,7 +76,7 @@ def polygon_bounds(system, load, res, *, facets=8, intervals="lam1", adjacency=F
     cs = polygon_constraints(system, load, facets)
     sc = Scales.of(cs)
     ch = sc.nondimensional(cs)
-    intervals = _intervals_option(intervals)
+    intervals = intervals_option(intervals)
     out = solve_highs(ch, load.has_periodic_part, intervals, adjacency, False)
     lf = sc.load_factor
     R = len(cs.c)

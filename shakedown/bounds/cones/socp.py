@@ -72,7 +72,7 @@ def _settings(clarabel, tol=SOLVER_TOL, method=None):
     s.max_iter = 200
     if method is not None:
         s.direct_solve_method = method
-    
+
     s.presolve_enable = False  # keep every cut row, so the multipliers line up with the cuts
     return s
 
