@@ -92,7 +92,7 @@ def _classify(r, u, sx, sy, g, rhoT, rhoN, states, phi, nhat, cfac):
 
 
 @njit(cache=True)
-def _newton_point(Kn, rb, sx, sy, g, rhoT, states, nhat, cfac, unew):
+def _newton_point(Kn, rb, sx, sy, g, rhoT, states, nhat, cfac, unew, dense_max):
     """The reduced semismooth Newton step of the current piece (see the module docstring):
     ``unew`` (3N,); returns False when the reduced matrix is singular."""
     n = g.size
@@ -152,7 +152,7 @@ def _newton_point(Kn, rb, sx, sy, g, rhoT, states, nhat, cfac, unew):
     for a in range(m):
         for col in range(m):
             J[a, col] *= cs[col]
-    x = np.linalg.solve(J, h)
+    x = _linear_solve(J, h, states, n, dense_max)
     for col in range(m):
         v = x[col] * cs[col]
         if not np.isfinite(v):
@@ -161,8 +161,111 @@ def _newton_point(Kn, rb, sx, sy, g, rhoT, states, nhat, cfac, unew):
     return True
 
 
+#: Reduced systems up to this size are solved by LU; larger ones by GMRES first (below).
+DENSE_MAX = 300
+
+
 @njit(cache=True)
-def newton(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter):
+def _linear_solve(J, h, states, n, dense_max):
+    """``J x = h``: LU with partial pivoting for ``m <= DENSE_MAX``, else restarted GMRES
+    preconditioned by the inverses of ``J``'s node blocks (2 x 2 slip, 3 x 3 separated), to a
+    relative residual of 1e-14, with LU when it does not get there in 120 iterations (a
+    ``O(m^2)``-per-iteration path for the large, well-conditioned systems where the LU's
+    ``O(m^3)`` dominates the step)."""
+    m = h.size
+    if m <= dense_max:
+        return np.linalg.solve(J, h)
+    # block-Jacobi preconditioner
+    Pinv = np.zeros((m, 3))
+    starts = np.empty(n + 1, np.int64)
+    nb = 0
+    pos = 0
+    for i in range(n):
+        if states[i] == SLIP or states[i] == SEPARATED:
+            starts[nb] = pos
+            pos += 2 if states[i] == SLIP else 3
+            nb += 1
+    starts[nb] = pos
+    for b in range(nb):
+        a0, a1 = starts[b], starts[b + 1]
+        blk = np.linalg.inv(J[a0:a1, a0:a1].copy())
+        for a in range(a1 - a0):
+            for c in range(a1 - a0):
+                Pinv[a0 + a, c] = blk[a, c]
+    hn = np.sqrt(np.sum(h * h))
+    x = np.zeros(m)
+    if hn == 0.0:
+        return x
+    restart = 40
+    V = np.empty((restart + 1, m))
+    H = np.zeros((restart + 1, restart))
+    cs = np.empty(restart)
+    sn = np.empty(restart)
+    g = np.empty(restart + 1)
+    z = np.empty(m)
+    total = 0
+    while total < 120:
+        rres = h - J @ x
+        beta = np.sqrt(np.sum(rres * rres))
+        if beta <= 1e-14 * hn:
+            return x
+        V[0] = rres / beta
+        g[:] = 0.0
+        g[0] = beta
+        k_used = 0
+        for k in range(restart):
+            total += 1
+            for b in range(nb):  # z = P^-1 V[k]
+                a0, a1 = starts[b], starts[b + 1]
+                for a in range(a1 - a0):
+                    acc = 0.0
+                    for c in range(a1 - a0):
+                        acc += Pinv[a0 + a, c] * V[k, a0 + c]
+                    z[a0 + a] = acc
+            w = J @ z
+            for j in range(k + 1):
+                H[j, k] = np.dot(w, V[j])
+                w -= H[j, k] * V[j]
+            H[k + 1, k] = np.sqrt(np.sum(w * w))
+            if H[k + 1, k] > 0.0:
+                V[k + 1] = w / H[k + 1, k]
+            for j in range(k):
+                t = cs[j] * H[j, k] + sn[j] * H[j + 1, k]
+                H[j + 1, k] = -sn[j] * H[j, k] + cs[j] * H[j + 1, k]
+                H[j, k] = t
+            den = np.hypot(H[k, k], H[k + 1, k])
+            cs[k], sn[k] = H[k, k] / den, H[k + 1, k] / den
+            H[k, k] = den
+            H[k + 1, k] = 0.0
+            g[k + 1] = -sn[k] * g[k]
+            g[k] = cs[k] * g[k]
+            k_used = k + 1
+            if abs(g[k + 1]) <= 1e-15 * hn or H[k, k] == 0.0:
+                break
+        y = np.zeros(k_used)
+        for j in range(k_used - 1, -1, -1):
+            acc = g[j]
+            for c in range(j + 1, k_used):
+                acc -= H[j, c] * y[c]
+            y[j] = acc / H[j, j]
+        upd = np.zeros(m)
+        for j in range(k_used):
+            upd += y[j] * V[j]
+        for b in range(nb):
+            a0, a1 = starts[b], starts[b + 1]
+            for a in range(a1 - a0):
+                acc = 0.0
+                for c in range(a1 - a0):
+                    acc += Pinv[a0 + a, c] * upd[a0 + c]
+                x[a0 + a] += acc
+    rres = h - J @ x
+    if np.sqrt(np.sum(rres * rres)) <= 1e-13 * hn:
+        return x
+    return np.linalg.solve(J, h)
+
+
+@njit(cache=True)
+def newton(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, dense_max=DENSE_MAX):
     """Semismooth Newton on the Alart-Curnier equations from the guess ``u`` (in place).
 
     Parameters
@@ -182,6 +285,8 @@ def newton(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter):
     tol : float
         Absolute stopping tolerance on ``max |phi|`` [force].
     max_iter : int
+    dense_max : int
+        Reduced systems up to this size by LU, larger ones by GMRES first.
 
     Returns
     -------
@@ -199,6 +304,8 @@ def newton(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter):
     phi_try = np.empty(3 * n)
     nh_try = np.zeros(2 * n)
     cf_try = np.zeros(n)
+    dr = np.empty(3 * n)
+    zero = np.zeros(3 * n)
     _reactions(Kn, rb, u, r)
     merit = _classify(r, u, sx, sy, g, rhoT, rhoN, states, phi, nhat, cfac)
     it = 0
@@ -206,14 +313,17 @@ def newton(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter):
         if np.max(np.abs(phi)) <= tol:
             return CONVERGED, it, np.max(np.abs(phi))
         it += 1
-        if not _newton_point(Kn, rb, sx, sy, g, rhoT, states, nhat, cfac, unew):
+        if not _newton_point(Kn, rb, sx, sy, g, rhoT, states, nhat, cfac, unew, dense_max):
             return SINGULAR, it, np.max(np.abs(phi))
+        for k in range(3 * n):  # the Newton direction and its reactions, once
+            unew[k] -= u[k]
+        _reactions(Kn, zero, unew, dr)
         alpha = 1.0
         accepted = False
         for _ls in range(30):
             for k in range(3 * n):
-                utry[k] = u[k] + alpha * (unew[k] - u[k])
-            _reactions(Kn, rb, utry, rtry)
+                utry[k] = u[k] + alpha * unew[k]
+                rtry[k] = r[k] + alpha * dr[k]
             mt = _classify(rtry, utry, sx, sy, g, rhoT, rhoN, st_try, phi_try, nh_try, cf_try)
             if mt <= (1.0 - 1e-4 * alpha) * merit or (alpha == 1.0 and mt <= merit
                                                      and np.max(np.abs(phi_try)) <= tol):

@@ -166,15 +166,20 @@ class ConeStepSolver:
         Relative tolerance of the verification (:data:`~.step_types.FEAS_TOL`).
     max_iter : int
         Newton iterations per attempt.
+    dense_max : int
+        Largest reduced Newton system solved by LU directly; larger ones are solved by
+        block-Jacobi preconditioned GMRES first (:func:`.cone_kernel._linear_solve`).
     """
 
-    def __init__(self, system, feas_tol: float = FEAS_TOL, max_iter: int = 60):
+    def __init__(self, system, feas_tol: float = FEAS_TOL, max_iter: int = 60,
+                 dense_max: int = ck.DENSE_MAX):
         self.system = system
         sysd = system.to_dense() if getattr(system, "is_sparse", False) else system
         self.data = ConeData.from_matrices(sysd.A, sysd.B, sysd.C, system.friction_xy)
         self.n = self.data.n
         self.feas_tol = float(feas_tol)
         self.max_iter = int(max_iter)
+        self.dense_max = int(dense_max)
         self.rhoT, self.rhoN = self.data.rho()
         self.A = np.asarray(sysd.A, float)
         self.Bt = np.asarray(sysd.B, float).T.copy()
@@ -214,7 +219,7 @@ class ConeStepSolver:
         for name, guess in tries:
             u = np.zeros(3 * n) if guess is None else np.array(guess, float).ravel()
             code, it, _ = ck.newton(d.Kn, rbf, d.sx, d.sy, d.g, self.rhoT, self.rhoN, u, r, st,
-                                    tol, self.max_iter)
+                                    tol, self.max_iter, self.dense_max)
             iters += it
             res = verify_step(d, rbf, u, r, F, equilibrium)
             if best is None or res.worst < best[3].worst:
