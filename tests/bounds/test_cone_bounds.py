@@ -163,6 +163,23 @@ def test_certificates_object_to_wrong_answers():
     z[k, 0] = -z[k, 0]
     bad = ConeCertificate(b.certificate.nodes, b.certificate.times, z)
     assert not check_dual_bound(s, load, bad, b.lam2_upper)[0]
+    # multipliers that keep stationarity but leave their cones would "prove" a smaller bound:
+    # move weight between two cuts of one node along a1_m - a1_m' (u rows and h . z unchanged)
+    from shakedown.bounds.cones.data import cone_data
+
+    d = cone_data(s, load)
+    nodes, times = b.certificate.nodes, b.certificate.times
+    node = np.bincount(nodes).argmax()
+    m, m2 = np.flatnonzero(nodes == node)[:2]
+    a1, _ = d.periodic(times[[m, m2]], nodes[[m, m2]])
+    e = a1[0] - a1[1]
+    z = b.certificate.multipliers.copy()
+    shift = -(2 * z[m, 0] + np.linalg.norm(z[m, 1:]) + 1.0) * e / np.linalg.norm(e)
+    z[m, 1:] += shift
+    z[m2, 1:] -= shift
+    bad = ConeCertificate(nodes, times, z)
+    ok, bound, res = check_dual_bound(s, load, bad, b.lam2_upper)
+    assert not ok and res["cone"] > 0.1 and bound < b.lam2_lower
     # multipliers moved to other times prove nothing (stationarity fails)
     bad = ConeCertificate(b.certificate.nodes, np.mod(b.certificate.times + 0.3, 1.0),
                           b.certificate.multipliers)
