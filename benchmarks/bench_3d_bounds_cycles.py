@@ -10,6 +10,7 @@ half-way through the run (a decaying dissipation: asymptotic shakedown is slow n
 it "keeps slipping".
 
     OPENBLAS_NUM_THREADS=1 python3 benchmarks/bench_3d_bounds_cycles.py [out.json]
+    OPENBLAS_NUM_THREADS=1 python3 benchmarks/bench_3d_bounds_cycles.py --probe out_probe.json
 """
 
 from __future__ import annotations
@@ -63,32 +64,43 @@ def runs_at(system, load, lam, seed):
     return out
 
 
-def main(path):
+def cases(probe):
+    """(coupled, seed, n) of the systems: the first pass, or ``--probe`` (more coupled
+    systems, N = 3 and 4, load factors close to lam_adj_cone)."""
+    if probe:
+        return [(True, seed, n) for n in (3, 4) for seed in range(3, 7)]
+    return [(True, seed, N) for seed in range(3)] + [(False, seed, N) for seed in range(2)]
+
+
+def main(path, probe=False):
     rows = []
-    for coupled in (True, False):
-        for seed in range(3 if coupled else 2):
-            s = random_3d(N, 100 + seed, coupled)
-            load = random_load(N, 200 + seed)
-            b = sd.shakedown_bounds(s, load, adjacency=True, intervals=False, facets=FACETS)
-            lam2, adj = b.lam2, b.lam_adj_cone
-            if coupled:
-                lams = {"0.95 lam_adj": 0.95 * adj, "mid(lam_adj, lam2)": 0.5 * (adj + lam2),
-                        "1.05 lam2": 1.05 * lam2}
-            else:
-                lams = {"0.9 lam2": 0.9 * lam2, "1.1 lam2": 1.1 * lam2}
-            for name, lam in lams.items():
-                t0 = time.perf_counter()
-                res = runs_at(s, load, lam, seed)
-                rows.append(dict(coupled=coupled, seed=seed, lam2=lam2, lam_adj_cone=adj,
-                                 lam1_cone=b.lam1_cone, where=name, lam=lam,
-                                 n_shook_down=sum(r["shook_down"] for r in res),
-                                 n_states=len(res), runs=res,
-                                 seconds=time.perf_counter() - t0))
-                print(coupled, seed, name, f"lam={lam:.5g}", rows[-1]["n_shook_down"], "/",
-                      len(res), [f"{r['w_half']:.1e}->{r['w_last']:.1e}" for r in res], flush=True)
-                with open(path, "w") as fh:
-                    json.dump(rows, fh, indent=1)
+    for coupled, seed, n in cases(probe):
+        s = random_3d(n, 100 + seed, coupled)
+        load = random_load(n, 200 + seed)
+        b = sd.shakedown_bounds(s, load, adjacency=True, intervals=False, facets=FACETS)
+        lam2, adj = b.lam2, b.lam_adj_cone
+        if probe:
+            lams = {"0.99 lam_adj": 0.99 * adj, "1.02 lam_adj": 1.02 * adj,
+                    "1.1 lam_adj": 1.1 * adj}
+        elif coupled:
+            lams = {"0.95 lam_adj": 0.95 * adj, "mid(lam_adj, lam2)": 0.5 * (adj + lam2),
+                    "1.05 lam2": 1.05 * lam2}
+        else:
+            lams = {"0.9 lam2": 0.9 * lam2, "1.1 lam2": 1.1 * lam2}
+        for name, lam in lams.items():
+            t0 = time.perf_counter()
+            res = runs_at(s, load, lam, seed)
+            rows.append(dict(coupled=coupled, seed=seed, n=n, lam2=lam2, lam_adj_cone=adj,
+                             lam1_cone=b.lam1_cone, where=name, lam=lam,
+                             n_shook_down=sum(r["shook_down"] for r in res),
+                             n_states=len(res), runs=res,
+                             seconds=time.perf_counter() - t0))
+            print(coupled, seed, n, name, f"lam={lam:.5g}", rows[-1]["n_shook_down"], "/",
+                  len(res), [f"{r['w_half']:.1e}->{r['w_last']:.1e}" for r in res], flush=True)
+            with open(path, "w") as fh:
+                json.dump(rows, fh, indent=1)
 
 
 if __name__ == "__main__":
-    main(sys.argv[1] if len(sys.argv) > 1 else "benchmarks/bounds_3d_cycles.json")
+    args = [a for a in sys.argv[1:] if a != "--probe"]
+    main(args[0] if args else "benchmarks/bounds_3d_cycles.json", probe="--probe" in sys.argv)

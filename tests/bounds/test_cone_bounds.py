@@ -230,3 +230,26 @@ def test_no_periodic_part_and_bad_input():
     s0 = random_3d(2, 11, friction=[0.0, 0.3])
     with pytest.raises(InputError, match="friction_xy"):
         sd.shakedown_bounds(s0, random_load(2, 1))
+
+
+def test_dissipation_figure_marks_the_3d_bounds():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from shakedown.plotting.bounds import plot_dissipation_vs_lam
+
+    s = random_3d(3, 12)
+    load = random_load(3, 13)
+    b = sd.shakedown_bounds(s, load, adjacency=True, intervals=False, facets=8)
+    lams = b.lam2 * np.array([0.5, 1.0, 1.5])
+    W = np.array([[0.0, 0.0], [1e-9, 0.0], [0.3, 0.3]])
+    ax = plot_dissipation_vs_lam(lams, W, b)
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert any("cones, certified" in t and f"{b.lam2:.4g}" in t for t in labels)
+    assert any("8-gons" in t and f"{b.lam_adj_cone:.4g}" in t for t in labels)
+    assert not any(r"\lambda_1$ (8-gons)" in t for t in labels)  # not computed: nan, not drawn
+    with pytest.raises(InputError, match="dissipation must have shape"):
+        plot_dissipation_vs_lam(lams, W[:2], b)
+    plt.close("all")
