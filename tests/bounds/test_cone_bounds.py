@@ -253,3 +253,25 @@ def test_dissipation_figure_marks_the_3d_bounds():
     with pytest.raises(InputError, match="dissipation must have shape"):
         plot_dissipation_vs_lam(lams, W[:2], b)
     plt.close("all")
+
+
+@pytest.mark.slow  # ~20 s on the loaded 2-core machine (3-D step solver set-up and 300 periods)
+def test_uncoupled_cyclic_runs_shake_down_below_lam2_and_slip_above():
+    """Klarbring, Ciavarella & Barber (2007): for B = 0 a non-empty H(lam) gives shakedown from
+    every initial state.  Two uncoupled nodes with elliptic loads, 3 initial states each:
+    below lam2 the dissipation dies out, above it every state dissipates the same W."""
+    from shakedown.evolution.steady_maps import sample_initial_slips
+
+    s = random_3d(2, 14, coupled=False)
+    load = random_load(2, 15, p_amp=0.0)
+    b = sd.shakedown_bounds(s, load, only=("lam2",))
+    V0 = sample_initial_slips(s, load, 3, rng=3)
+    below = sd.solve_cycles(s, load, 0.9 * b.lam2, initial_slip=V0, steps_per_cycle=12,
+                            max_cycles=50, tol=1e-9)
+    above = sd.solve_cycles(s, load, 1.1 * b.lam2, initial_slip=V0, steps_per_cycle=12,
+                            max_cycles=50, tol=1e-9)
+    w_above = np.array([r.dissipation[-1] for r in above])
+    assert w_above.min() > 0.05 * w_above.max() > 0
+    assert np.ptp(w_above) <= 1e-4 * w_above.max()  # the same steady dissipation
+    for r in below:
+        assert r.shook_down or r.dissipation[-1] <= 1e-6 * w_above.max()
