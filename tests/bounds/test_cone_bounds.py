@@ -35,6 +35,11 @@ def random_load(n, seed, p_amp=0.2, harmonics=1):
         p_cos=p_amp * n * rng.normal(size=(h, n)), p_sin=p_amp * n * rng.normal(size=(h, n)))
 
 
+def contains(b, exact, slack=1e-8):
+    """The certified bracket holds the exact value (``slack``: the SOCP solver's tolerance)."""
+    return b.lam2_lower <= exact * (1 + slack) and exact <= b.lam2_upper * (1 + slack)
+
+
 def bracket_ok(b, rtol=1e-6):
     return b.lam2_lower <= b.lam2_upper * (1 + 1e-9) and \
         b.lam2_upper - b.lam2_lower <= rtol * b.lam2_upper
@@ -53,7 +58,7 @@ def test_uncoupled_constant_p_is_the_semi_major_axis_reference(friction):
                           compute_uv=False)[0] for i in range(n)]
     ref = min(load.p0[i] / axes[i] for i in range(n))
     assert b.status == "bounded" and bracket_ok(b)
-    np.testing.assert_allclose(b.lam2, ref, rtol=1e-7)
+    assert contains(b, ref)
 
 
 def _uncoupled_varying_p_reference(load, f, i, grid=1024):
@@ -136,8 +141,7 @@ def test_unloaded_uncoupled_second_direction_reproduces_2d(seed):
     b2 = sd.shakedown_bounds(s2, l2, adjacency=True, solver="highs")
     s3, l3 = embed_2d(s2, l2, seed)
     b3 = sd.shakedown_bounds(s3, l3, adjacency=True, facets=8)
-    assert bracket_ok(b3)
-    np.testing.assert_allclose(b3.lam2, b2.lam2, rtol=1e-6)
+    assert bracket_ok(b3) and contains(b3, b2.lam2)
     # the inscribed polygons with vertices on the x axis cut q_y = 0 exactly at +-f p
     np.testing.assert_allclose(b3.lam2_polygon, b2.lam2, rtol=1e-7)
     np.testing.assert_allclose(b3.lam_adj_cone, b2.lam_adj, rtol=1e-7)
@@ -213,7 +217,7 @@ def test_sampled_socp_overestimates_and_the_exact_bracket_lies_below():
         bs = sd.shakedown_bounds(s, load.to_samples(S), only=("lam2",))
         values.append(bs.lam2)
         # the sampled problem keeps only S times of the cycle: a relaxation
-        assert bs.lam2_lower >= b.lam2_upper * (1 - 1e-7)
+        assert bs.lam2_upper >= b.lam2_upper and bs.lam2_lower >= b.lam2_lower
     assert values[0] > b.lam2_upper * (1 + 1e-3)  # coarse sampling over-estimates visibly
     assert values[-1] - b.lam2 < values[0] - b.lam2  # and the error shrinks with S
 

@@ -31,7 +31,7 @@ from .separation import worst_times
 from .socp import LAM_CAP, dual_bound, solve_cuts, static_margin
 
 #: Default relative width of the certified bracket ``[lam_lo, lam_hi]``.
-BRACKET_RTOL = 1e-7
+BRACKET_RTOL = 1e-6
 #: A node is cut again when its violation exceeds this (units of the force scale).
 CUT_TOL = 1e-12
 #: Largest accepted dual residual (cone membership, stationarity), relative.
