@@ -64,15 +64,12 @@ def _clarabel():
     return clarabel
 
 
-def _settings(clarabel, tol=SOLVER_TOL, method=None):
+def _settings(clarabel, tol=SOLVER_TOL):
     s = clarabel.DefaultSettings()
     s.verbose = False
     s.tol_gap_abs = s.tol_gap_rel = s.tol_feas = tol
     s.tol_ktratio = 1e-8
     s.max_iter = 200
-    if method is not None:
-        s.direct_solve_method = method
-
     s.presolve_enable = False  # keep every cut row, so the multipliers line up with the cuts
     return s
 
