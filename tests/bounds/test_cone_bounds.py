@@ -279,3 +279,31 @@ def test_uncoupled_cyclic_runs_shake_down_below_lam2_and_slip_above():
     assert np.ptp(w_above) <= 1e-4 * w_above.max()  # the same steady dissipation
     for r in below:
         assert r.shook_down or r.dissipation[-1] <= 1e-6 * w_above.max()
+
+
+@pytest.mark.slow  # cvxpy's canonicalisation: ~25 s on the loaded 2-core machine
+def test_relaxation_value_matches_an_independent_cvxpy_model_in_the_slips():
+    """The engine's last relaxation, rebuilt in the original unknowns (v, lam) and units by
+    cvxpy (its own canonicalisation; the solver is Clarabel too, SCS did not reach 1e-6 in 80 s),
+    has the value of the certified bracket: the reduced-variable transform (s = A v,
+    E = B^T A^-1 diag(f)) and the nondimensional scaling lose nothing (elliptic cones here)."""
+    import cvxpy as cp
+
+    s = random_3d(3, 16, friction=[[0.3, 0.5], [0.4, 0.4], [0.6, 0.35]])
+    load = random_load(3, 17)
+    b = sd.shakedown_bounds(s, load, only=("lam2",))
+    nodes, times = b.certificate.nodes, b.certificate.times
+    q1, p1 = load.periodic(times)  # (M, N, 2), (M, N)
+    v, lam = cp.Variable(6), cp.Variable()
+    q = (s.A @ v).reshape((3, 2), order="C")
+    p = s.B.T @ v
+    W = 1.0 / s.friction_xy
+    cons = [lam >= 0]
+    for m, (i, t) in enumerate(zip(nodes, times, strict=True)):
+        qi = cp.multiply(W[i], load.q0[i] + lam * q1[m, i] + q[i])
+        cons.append(cp.norm(qi) <= load.p0[i] + lam * p1[m, i] + p[i])
+    prob = cp.Problem(cp.Maximize(lam), cons)
+    prob.solve(solver="CLARABEL")
+    assert prob.status == "optimal"
+    np.testing.assert_allclose(lam.value, b.lam2_upper, rtol=1e-6)
+    assert lam.value >= b.lam2_lower * (1 - 1e-7)
