@@ -299,7 +299,7 @@ def test_relaxation_value_matches_an_independent_cvxpy_model_in_the_slips():
     p = s.B.T @ v
     W = 1.0 / s.friction_xy
     cons = [lam >= 0]
-    for m, (i, t) in enumerate(zip(nodes, times, strict=True)):
+    for m, i in enumerate(nodes):
         qi = cp.multiply(W[i], load.q0[i] + lam * q1[m, i] + q[i])
         cons.append(cp.norm(qi) <= load.p0[i] + lam * p1[m, i] + p[i])
     prob = cp.Problem(cp.Maximize(lam), cons)
