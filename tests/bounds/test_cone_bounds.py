@@ -307,3 +307,22 @@ def test_relaxation_value_matches_an_independent_cvxpy_model_in_the_slips():
     assert prob.status == "optimal"
     np.testing.assert_allclose(lam.value, b.lam2_upper, rtol=1e-6)
     assert lam.value >= b.lam2_lower * (1 - 1e-7)
+
+
+def test_verdict_table_and_json_of_a_3d_result():
+    import json
+
+    s = random_3d(3, 18)
+    load = random_load(3, 19)
+    only2 = sd.shakedown_bounds(s, load, only=("lam2",))
+    assert "lam_adj_cone was not computed" in only2.verdict()
+    b = sd.shakedown_bounds(s, load, adjacency=True, intervals=False, facets=8)
+    text = b.verdict()
+    assert f"lam2 = {b.lam2:.4g}" in text and f"lam_adj_cone = {b.lam_adj_cone:.4g}" in text
+    assert "not a proof" in text
+    d = json.loads(json.dumps(b.to_dict()))
+    assert d["dim"] == 3 and d["facets"] == 8 and d["lam1_cone"] == "nan"
+    t = b.table()
+    assert list(t["node"]) == [1, 2, 3] and t["cuts"].sum() == b.n_cuts
+    assert np.all((t["t_worst"] >= 0) & (t["t_worst"] < 1))
+    assert b.lam_adj_cone <= b.lam2_polygon * (1 + 1e-7) <= b.lam2 * (1 + 1e-7)
