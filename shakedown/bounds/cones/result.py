@@ -54,7 +54,9 @@ class ConeBounds:
         ``(2 a + 1) pi / k`` in the node's tangent plane).
     safe_lam : float
     safe_state : ndarray, shape (2N,)
-        A slip state safe at ``safe_lam`` [length] (``(v_1x, v_1y, v_2x, ...)``).
+        A slip state safe at ``safe_lam`` [length] (``(v_1x, v_1y, v_2x, ...)``): the convex
+        combination of the static state of largest margin and ``state_at_lam2``, checked over
+        the continuous cycle; empty when ``safe_lam > lam2_lower``.
     safe_margin : float
         Its smallest distance to a cone, ``min_i min_t (p_i - |W_i q_i|)`` [force].
     state_at_lam2 : ndarray, shape (2N,)
