@@ -1,0 +1,1 @@
+"""Half-space frictional contact (MODEL.md s.8.5): discrete model, continuum reference."""
