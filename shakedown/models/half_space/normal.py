@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...model import InputError
-from .operators import _circulant_fft
+from .operators import _circulant_fft, fft_size
 
 
 @dataclass(frozen=True)
@@ -54,10 +54,10 @@ class NormalContact:
 def _zz_operator(model):
     n = model.n
     hat = _circulant_fft(model.kernels["zz"], n)
+    s = (fft_size(n),) * 2
 
     def apply(p):
-        return np.fft.irfft2(hat * np.fft.rfft2(p.reshape(n, n), s=(2 * n, 2 * n)),
-                             s=(2 * n, 2 * n))[:n, :n].ravel()
+        return np.fft.irfft2(hat * np.fft.rfft2(p.reshape(n, n), s=s), s=s)[:n, :n].ravel()
     return apply
 
 

@@ -2,8 +2,9 @@
 
 The compliance of an ``n x n`` grid of equal cells depends only on the offset between cells
 (:func:`.influence.offset_kernels`), so ``u = F r`` is a discrete 2-D convolution.  Embedding
-each kernel of ``(2n - 1)^2`` offsets in a ``2n x 2n`` circulant (the discrete-convolution FFT of
-Liu, Wang & Liu, *Wear* 243, 2000) makes the product exact (no periodic images) at
+each kernel of ``(2n - 1)^2`` offsets in an ``M x M`` circulant, ``M >= 2n - 1`` (the
+discrete-convolution FFT of Liu, Wang & Liu, *Wear* 243, 2000), makes the product exact (no
+periodic images) at
 ``O(n^2 log n)`` cost and ``O(n^2)`` memory, against ``O(n^4)`` for the dense ``F``.
 
 * :class:`CellCompliance`: ``F`` over all ``N = n^2`` cells, ``(3N, 3N)``, MODEL.md s.8 order.
@@ -20,16 +21,23 @@ All three are :class:`scipy.sparse.linalg.LinearOperator` objects (``@``, ``matv
 from __future__ import annotations
 
 import numpy as np
+from scipy.fft import next_fast_len
 from scipy.sparse.linalg import LinearOperator, cg
 
 from ...model import SolverError
 
 
+def fft_size(n: int) -> int:
+    """Side ``M >= 2n - 1`` of the circulant embedding, a fast FFT length (5-smooth)."""
+    return next_fast_len(2 * int(n) - 1, real=True)
+
+
 def _circulant_fft(kernel: np.ndarray, n: int) -> np.ndarray:
-    """``rfft2`` of a ``(2n - 1)^2`` offset kernel embedded in a ``2n x 2n`` circulant."""
-    c = np.zeros((2 * n, 2 * n))
+    """``rfft2`` of a ``(2n - 1)^2`` offset kernel embedded in an ``M x M`` circulant."""
+    M = fft_size(n)
+    c = np.zeros((M, M))
     c[: 2 * n - 1, : 2 * n - 1] = kernel
-    c = np.roll(c, (-(n - 1), -(n - 1)), axis=(0, 1))  # offset d stored at index d mod 2n
+    c = np.roll(c, (-(n - 1), -(n - 1)), axis=(0, 1))  # offset d stored at index d mod M
     return np.fft.rfft2(c)
 
 
@@ -61,7 +69,7 @@ class CellCompliance(LinearOperator):
         X = np.asarray(X, float)
         n, N = self.n, self.n * self.n
         qx, qy, p = self._fields(X)
-        s = (2 * n, 2 * n)
+        s = (fft_size(n),) * 2
         fx = np.fft.rfft2(qx, s=s, axes=(0, 1))
         fy = np.fft.rfft2(qy, s=s, axes=(0, 1))
         fp = np.fft.rfft2(p, s=s, axes=(0, 1))
