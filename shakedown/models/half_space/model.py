@@ -88,6 +88,7 @@ class HalfSpaceModel:
     gap : ndarray, shape (n^2,)
         Cell means of the initial gap [length].
     friction : float
+    materials : ((E1, nu1), (E2, nu2))
     kernels : dict
         Offset kernels of :func:`.influence.offset_kernels` [length/force].
     """
@@ -102,7 +103,8 @@ class HalfSpaceModel:
     friction: float
     profile: str
     radius: float | None
-    kernels: dict = field(repr=False)
+    materials: tuple = ((1.0, 0.3), (1.0, 0.3))
+    kernels: dict = field(default=None, repr=False)
 
     # -- geometry -----------------------------------------------------------------------------
     @property
@@ -349,4 +351,6 @@ def half_space_model(profile: str = "sphere", *, radius=None, radii=None, flat_r
     kernels = offset_kernels(n, h, e_star, beta, b)
     return HalfSpaceModel(n=n, h=h, xy_cells=xy, reference=m, e_star=e_star, beta=beta, gap=gap,
                           friction=f, profile=profile,
-                          radius=None if radius is None else float(radius), kernels=kernels)
+                          radius=None if radius is None else float(radius),
+                          materials=tuple((float(E), float(nu)) for E, nu in materials),
+                          kernels=kernels)
