@@ -134,34 +134,41 @@ def _paths(X, P0, rng, k):
     return out
 
 
-def part_uniqueness(n, X=0.5, k=6, seed=0):
+def part_uniqueness(n, X=0.5, k=6, seed=0, steps=40):
+    """Cycles from k initial loading paths; W of the last cycle, tractions of the last orbit."""
     rng = np.random.default_rng(seed)
     rows = []
-    print("| materials | beta | load | paths | W spread / W | max traction spread / (f p0 h^2) "
-          "| stuck sets equal |")
-    print("|---|---|---|---|---|---|---|")
+    print("| materials | beta | load | paths | all steady | W spread / W | spread of q - mean_t q "
+          "/ (f p0 h^2) | spread of q / (f p0 h^2) | stuck sets equal (sizes) |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for label, mats in (("similar", ((E, 0.3), (E, 0.3))),
                         ("rigid on nu=0.3", ((E, 0.3), (np.inf, 0.0)))):
         m = sd.half_space_model(radius=R, n_cells=n, width=2.4 * _a(m_star(mats)), friction=F,
                                 materials=mats)
         p0 = float(cont.hertz_peak_pressure(P, R, m.e_star))
         for lname, qy in (("oscillating", 0.0), ("rotating", X)):
-            Ws, qs, stuck = [], [], []
+            Ws, qs, stuck, steady = [], [], [], []
             for path in _paths(X, P, rng, k):
                 res = hs.static_path(m, path, substeps=4)[-1][0]
-                run, loop = hs.fretting_run(m, P, X * F * P, qy * F * P, steps_per_cycle=40,
-                                            max_cycles=12, initial_slip=res.slip,
-                                            initial_gap=res.gap)
-                Ws.append(run.steady_dissipation)
+                run, loop = hs.fretting_run(m, P, X * F * P, qy * F * P, steps_per_cycle=steps,
+                                            max_cycles=25, initial_slip=res.slip,
+                                            initial_gap=res.gap, tol=1e-7)
+                Ws.append(run.dissipation[-1])
                 qs.append(loop["q_full"])
-                stuck.append(tuple(run.stuck_nodes))
+                stuck.append(tuple(sorted(run.stuck_nodes.tolist())))
+                steady.append(run.status == "periodic")
             Ws = np.array(Ws)
+            qa = np.array(qs)
             spread = float(np.ptp(Ws) / np.mean(Ws))
-            qsp = float(np.max(np.ptp(np.array(qs), axis=0)) / (F * p0 * m.h**2))
+            qsp = float(np.max(np.ptp(qa, axis=0)) / (F * p0 * m.h**2))
+            qvar = qa - qa.mean(axis=1, keepdims=True)
+            qvsp = float(np.max(np.ptp(qvar, axis=0)) / (F * p0 * m.h**2))
             same = all(s == stuck[0] for s in stuck)
             rows.append(dict(materials=label, beta=m.beta, load=lname, W=Ws.tolist(), W_spread=spread,
-                             q_spread=qsp, stuck_equal=same, n_stuck=[len(s) for s in stuck]))
-            print(f"| {label} | {m.beta:.3f} | {lname} | {k} | {spread:.1e} | {qsp:.1e} | {same} |")
+                             q_spread=qsp, q_var_spread=qvsp, stuck_equal=same, steady=steady,
+                             n_stuck=[len(s) for s in stuck]))
+            print(f"| {label} | {m.beta:.3f} | {lname} | {k} | {all(steady)} | {spread:.1e} | {qvsp:.1e} "
+                  f"| {qsp:.1e} | {same} ({', '.join(str(len(s)) for s in stuck)}) |")
     return rows
 
 
