@@ -396,3 +396,33 @@ def gauss_seidel(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_sweeps, l
 
 __all__ = ["newton", "gauss_seidel", "STICK", "SLIP", "SEPARATED", "HAVE_KERNEL", "CONVERGED",
            "STALLED", "MAX_ITER", "SINGULAR"]
+
+
+@njit(cache=True)
+def residuals(Kn, rb, sx, sy, g, kT, kN, u, r, F, equilibrium):
+    """The compiled twin of :func:`~.cone_step.verify_step` (the same four conditions, same
+    scaling; the step solver's per-step check): returns ``(cone, direction, normal,
+    equilibrium)``, each dimensionless (equilibrium 0 when not asked)."""
+    n = g.size
+    cone = 0.0
+    direc = 0.0
+    normal = 0.0
+    eq = 0.0
+    for i in range(n):
+        qx, qy, p = r[3 * i], r[3 * i + 1], r[3 * i + 2]
+        vx, vy, w = u[3 * i], u[3 * i + 1], u[3 * i + 2]
+        c = (np.sqrt((qx / sx[i]) ** 2 + (qy / sy[i]) ** 2) - g[i] * p) * min(sx[i], sy[i])
+        cone = max(cone, c)
+        d = qx * vx + qy * vy + g[i] * p * np.sqrt((sx[i] * vx) ** 2 + (sy[i] * vy) ** 2)
+        direc = max(direc, abs(d) * kT[i])
+        normal = max(normal, abs(min(kN[i] * w, p)))
+    if equilibrium:
+        m = 3 * n
+        for j in range(m):
+            acc = rb[j] - r[j]
+            for k in range(m):
+                uk = u[k]
+                if uk != 0.0:
+                    acc += Kn[j, k] * uk
+            eq = max(eq, abs(acc))
+    return cone / F, direc / (F * F), normal / F, eq / F

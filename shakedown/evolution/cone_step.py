@@ -229,7 +229,7 @@ class ConeStepSolver:
             code, it, _ = ck.newton(d.Kn, rbf, d.sx, d.sy, d.g, self.rhoT, self.rhoN, u, r, st,
                                     tol, self.max_iter, self.dense_max, slack)
             iters += it
-            res = verify_step(d, rbf, u, r, F, equilibrium)
+            res = self._verify(rbf, u, r, F, equilibrium)
             if best is None or res.worst < best[3].worst:
                 best = (u.copy(), r.copy(), st.copy(), res, name)
             if res.worst <= self.feas_tol:
@@ -242,13 +242,19 @@ class ConeStepSolver:
             code, it, _ = ck.gauss_seidel(d.Kn, rbf, d.sx, d.sy, d.g, self.rhoT, self.rhoN, u,
                                           r, st, tol, 2000, 50, slack)
             iters += it
-            res = verify_step(d, rbf, u, r, F, equilibrium)
+            res = self._verify(rbf, u, r, F, equilibrium)
             if res.worst < best[3].worst:
                 best = (u.copy(), r.copy(), st.copy(), res, "gauss_seidel")
         u, r, st, res, name = best
         self.totals["steps"] += 1
         self.totals["iterations"] += iters
         return u.reshape(n, 3), r.reshape(n, 3), st, name, iters, res, F
+
+    def _verify(self, rb, u, r, F, equilibrium):
+        """:func:`verify_step` by its compiled twin :func:`.cone_kernel.residuals`."""
+        d = self.data
+        return ConeResiduals(*ck.residuals(d.Kn, rb, d.sx, d.sy, d.g, d.kT, d.kN, u, r,
+                                           float(F), bool(equilibrium)))
 
     # ------------------------------------------------------------------ public step
     def solve(self, v_prev, q_w, p_w, guess=None) -> ConeStepResult:

@@ -76,6 +76,22 @@ def test_verifier_accepts_the_answer_and_rejects_each_kind_of_wrong_answer():
     assert res.equilibrium > 1e2 * tol and res.worst > tol
 
 
+def test_compiled_verifier_equals_the_numpy_one_on_right_and_wrong_answers():
+    s, sol, v, q_w, p_w, r = _slipping_answer()
+    rb = sol.base(v, q_w, p_w)
+    rng = np.random.default_rng(0)
+    u = np.column_stack([r.slip_increment, r.gap])
+    for k in range(5):
+        uk = u + (k > 0) * 1e-3 * rng.normal(size=u.shape)
+        Rk = rb + (sol.data.Kn @ uk.ravel()).reshape(-1, 3) + (k > 2) * 1e-4
+        a = verify_step(sol.data, rb, uk, Rk, r.force_scale)
+        b = sol._verify(rb.ravel(), uk.ravel(), Rk.ravel(), r.force_scale, True)
+        np.testing.assert_allclose([b.cone, b.direction, b.normal, b.equilibrium],
+                                   [a.cone, a.direction, a.normal, a.equilibrium],
+                                   rtol=1e-9, atol=1e-15)
+        assert (a.worst > 1e-6) == (k > 0)
+
+
 def test_a_failing_answer_gets_status_failed():
     s, sol, v, q_w, p_w, r = _slipping_answer()
     rb = sol.base(v, q_w, p_w)
