@@ -55,9 +55,12 @@ def _reactions(Kn, rb, u, r):
 
 
 @njit(cache=True)
-def _classify(r, u, sx, sy, g, rhoT, rhoN, states, phi, nhat, cfac):
+def _classify(r, u, sx, sy, g, rhoT, rhoN, states, phi, nhat, cfac, slack):
     """States at the point ``(u, r)``, the AC residual ``phi`` (force units, (3N,)) and, per slip
-    node, ``n = t / |t|`` and ``c = g R / |t|``; returns ``sum phi^2``."""
+    node, ``n = t / |t|`` and ``c = g R / |t|``; returns ``sum phi^2``.  ``slack`` [force]: a
+    node whose trial traction exceeds the cone by at most this is taken as stuck (the 2-D active
+    set accepts the same, up to its feasibility tolerance, so that slips far below the
+    verification tolerance do not linger)."""
     n = g.size
     merit = 0.0
     for i in range(n):
@@ -76,7 +79,7 @@ def _classify(r, u, sx, sy, g, rhoT, rhoN, states, phi, nhat, cfac):
             ty = qty - rhoT[i] * sy[i] * vy
             tn = np.sqrt(tx * tx + ty * ty)
             rad = g[i] * R
-            if tn <= rad:
+            if tn <= rad + slack / min(sx[i], sy[i]):
                 states[i] = STICK
                 phi[3 * i] = sx[i] * (qtx - tx)  # = rho_T s^2 dv: a force
                 phi[3 * i + 1] = sy[i] * (qty - ty)
@@ -92,7 +95,7 @@ def _classify(r, u, sx, sy, g, rhoT, rhoN, states, phi, nhat, cfac):
 
 
 @njit(cache=True)
-def _newton_point(Kn, rb, sx, sy, g, rhoT, states, nhat, cfac, unew):
+def _newton_point(Kn, rb, sx, sy, g, rhoT, states, nhat, cfac, unew, dense_max):
     """The reduced semismooth Newton step of the current piece (see the module docstring):
     ``unew`` (3N,); returns False when the reduced matrix is singular."""
     n = g.size
@@ -152,7 +155,7 @@ def _newton_point(Kn, rb, sx, sy, g, rhoT, states, nhat, cfac, unew):
     for a in range(m):
         for col in range(m):
             J[a, col] *= cs[col]
-    x = np.linalg.solve(J, h)
+    x = _linear_solve(J, h, states, n, dense_max)
     for col in range(m):
         v = x[col] * cs[col]
         if not np.isfinite(v):
@@ -161,8 +164,112 @@ def _newton_point(Kn, rb, sx, sy, g, rhoT, states, nhat, cfac, unew):
     return True
 
 
+#: Reduced systems up to this size are solved by LU; larger ones by GMRES first (below).
+DENSE_MAX = 300
+
+
 @njit(cache=True)
-def newton(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter):
+def _linear_solve(J, h, states, n, dense_max):
+    """``J x = h``: LU with partial pivoting for ``m <= DENSE_MAX``, else restarted GMRES
+    preconditioned by the inverses of ``J``'s node blocks (2 x 2 slip, 3 x 3 separated), to a
+    relative residual of 1e-14, with LU when it does not get there in 120 iterations (a
+    ``O(m^2)``-per-iteration path for the large, well-conditioned systems where the LU's
+    ``O(m^3)`` dominates the step)."""
+    m = h.size
+    if m <= dense_max:
+        return np.linalg.solve(J, h)
+    # block-Jacobi preconditioner
+    Pinv = np.zeros((m, 3))
+    starts = np.empty(n + 1, np.int64)
+    nb = 0
+    pos = 0
+    for i in range(n):
+        if states[i] == SLIP or states[i] == SEPARATED:
+            starts[nb] = pos
+            pos += 2 if states[i] == SLIP else 3
+            nb += 1
+    starts[nb] = pos
+    for b in range(nb):
+        a0, a1 = starts[b], starts[b + 1]
+        blk = np.linalg.inv(J[a0:a1, a0:a1].copy())
+        for a in range(a1 - a0):
+            for c in range(a1 - a0):
+                Pinv[a0 + a, c] = blk[a, c]
+    hn = np.sqrt(np.sum(h * h))
+    x = np.zeros(m)
+    if hn == 0.0:
+        return x
+    restart = 40
+    V = np.empty((restart + 1, m))
+    H = np.zeros((restart + 1, restart))
+    cs = np.empty(restart)
+    sn = np.empty(restart)
+    g = np.empty(restart + 1)
+    z = np.empty(m)
+    total = 0
+    while total < 120:
+        rres = h - J @ x
+        beta = np.sqrt(np.sum(rres * rres))
+        if beta <= 1e-14 * hn:
+            return x
+        V[0] = rres / beta
+        g[:] = 0.0
+        g[0] = beta
+        k_used = 0
+        for k in range(restart):
+            total += 1
+            for b in range(nb):  # z = P^-1 V[k]
+                a0, a1 = starts[b], starts[b + 1]
+                for a in range(a1 - a0):
+                    acc = 0.0
+                    for c in range(a1 - a0):
+                        acc += Pinv[a0 + a, c] * V[k, a0 + c]
+                    z[a0 + a] = acc
+            w = J @ z
+            for j in range(k + 1):
+                H[j, k] = np.dot(w, V[j])
+                w -= H[j, k] * V[j]
+            H[k + 1, k] = np.sqrt(np.sum(w * w))
+            if H[k + 1, k] > 0.0:
+                V[k + 1] = w / H[k + 1, k]
+            for j in range(k):
+                t = cs[j] * H[j, k] + sn[j] * H[j + 1, k]
+                H[j + 1, k] = -sn[j] * H[j, k] + cs[j] * H[j + 1, k]
+                H[j, k] = t
+            den = np.hypot(H[k, k], H[k + 1, k])
+            cs[k], sn[k] = H[k, k] / den, H[k + 1, k] / den
+            H[k, k] = den
+            H[k + 1, k] = 0.0
+            g[k + 1] = -sn[k] * g[k]
+            g[k] = cs[k] * g[k]
+            k_used = k + 1
+            if abs(g[k + 1]) <= 1e-15 * hn or H[k, k] == 0.0:
+                break
+        y = np.zeros(k_used)
+        for j in range(k_used - 1, -1, -1):
+            acc = g[j]
+            for c in range(j + 1, k_used):
+                acc -= H[j, c] * y[c]
+            y[j] = acc / H[j, j]
+        upd = np.zeros(m)
+        for j in range(k_used):
+            upd += y[j] * V[j]
+        for b in range(nb):
+            a0, a1 = starts[b], starts[b + 1]
+            for a in range(a1 - a0):
+                acc = 0.0
+                for c in range(a1 - a0):
+                    acc += Pinv[a0 + a, c] * upd[a0 + c]
+                x[a0 + a] += acc
+    rres = h - J @ x
+    if np.sqrt(np.sum(rres * rres)) <= 1e-13 * hn:
+        return x
+    return np.linalg.solve(J, h)
+
+
+@njit(cache=True)
+def newton(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, dense_max=DENSE_MAX,
+           slack=0.0):
     """Semismooth Newton on the Alart-Curnier equations from the guess ``u`` (in place).
 
     Parameters
@@ -182,6 +289,10 @@ def newton(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter):
     tol : float
         Absolute stopping tolerance on ``max |phi|`` [force].
     max_iter : int
+    dense_max : int
+        Reduced systems up to this size by LU, larger ones by GMRES first.
+    slack : float
+        Stick acceptance beyond the cone [force] (see :func:`_classify`).
 
     Returns
     -------
@@ -199,22 +310,28 @@ def newton(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter):
     phi_try = np.empty(3 * n)
     nh_try = np.zeros(2 * n)
     cf_try = np.zeros(n)
+    dr = np.empty(3 * n)
+    zero = np.zeros(3 * n)
     _reactions(Kn, rb, u, r)
-    merit = _classify(r, u, sx, sy, g, rhoT, rhoN, states, phi, nhat, cfac)
+    merit = _classify(r, u, sx, sy, g, rhoT, rhoN, states, phi, nhat, cfac, slack)
     it = 0
     while it < max_iter:
         if np.max(np.abs(phi)) <= tol:
             return CONVERGED, it, np.max(np.abs(phi))
         it += 1
-        if not _newton_point(Kn, rb, sx, sy, g, rhoT, states, nhat, cfac, unew):
+        if not _newton_point(Kn, rb, sx, sy, g, rhoT, states, nhat, cfac, unew, dense_max):
             return SINGULAR, it, np.max(np.abs(phi))
+        for k in range(3 * n):  # the Newton direction and its reactions, once
+            unew[k] -= u[k]
+        _reactions(Kn, zero, unew, dr)
         alpha = 1.0
         accepted = False
         for _ls in range(30):
             for k in range(3 * n):
-                utry[k] = u[k] + alpha * (unew[k] - u[k])
-            _reactions(Kn, rb, utry, rtry)
-            mt = _classify(rtry, utry, sx, sy, g, rhoT, rhoN, st_try, phi_try, nh_try, cf_try)
+                utry[k] = u[k] + alpha * unew[k]
+                rtry[k] = r[k] + alpha * dr[k]
+            mt = _classify(rtry, utry, sx, sy, g, rhoT, rhoN, st_try, phi_try, nh_try, cf_try,
+                           slack)
             if mt <= (1.0 - 1e-4 * alpha) * merit or (alpha == 1.0 and mt <= merit
                                                      and np.max(np.abs(phi_try)) <= tol):
                 accepted = True
@@ -235,7 +352,8 @@ def newton(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter):
 
 
 @njit(cache=True)
-def gauss_seidel(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_sweeps, local_iter):
+def gauss_seidel(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_sweeps, local_iter,
+                 slack=0.0):
     """Projected block Gauss-Seidel (the fallback): each node's own 3 x 3 problem solved exactly
     by :func:`newton` with the other nodes frozen, sweeps until the global AC residual is below
     ``tol`` [force].  Converges for small enough friction; slow (linear) but independent of the
@@ -262,14 +380,14 @@ def gauss_seidel(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_sweeps, l
                     s -= Kl[a, b] * ul[b]
                 rbl[a] = s
             newton(Kl, rbl, sx[i:i + 1], sy[i:i + 1], g[i:i + 1], rhoT[i:i + 1],
-                   rhoN[i:i + 1], ul, rl, stl, 1e-3 * tol, local_iter)
+                   rhoN[i:i + 1], ul, rl, stl, 1e-3 * tol, local_iter, 10, slack)
             for b in range(3):
                 d = ul[b] - u[3 * i + b]
                 if d != 0.0:
                     for j in range(3 * n):
                         r[j] += Kn[3 * i + b, j] * d
                     u[3 * i + b] = ul[b]
-        _classify(r, u, sx, sy, g, rhoT, rhoN, states, phi, nhat, cfac)
+        _classify(r, u, sx, sy, g, rhoT, rhoN, states, phi, nhat, cfac, slack)
         res = np.max(np.abs(phi))
         if res <= tol:
             return CONVERGED, sweep + 1, res
@@ -278,3 +396,33 @@ def gauss_seidel(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_sweeps, l
 
 __all__ = ["newton", "gauss_seidel", "STICK", "SLIP", "SEPARATED", "HAVE_KERNEL", "CONVERGED",
            "STALLED", "MAX_ITER", "SINGULAR"]
+
+
+@njit(cache=True)
+def residuals(Kn, rb, sx, sy, g, kT, kN, u, r, F, equilibrium):
+    """The compiled twin of :func:`~.cone_step.verify_step` (the same four conditions, same
+    scaling; the step solver's per-step check): returns ``(cone, direction, normal,
+    equilibrium)``, each dimensionless (equilibrium 0 when not asked)."""
+    n = g.size
+    cone = 0.0
+    direc = 0.0
+    normal = 0.0
+    eq = 0.0
+    for i in range(n):
+        qx, qy, p = r[3 * i], r[3 * i + 1], r[3 * i + 2]
+        vx, vy, w = u[3 * i], u[3 * i + 1], u[3 * i + 2]
+        c = (np.sqrt((qx / sx[i]) ** 2 + (qy / sy[i]) ** 2) - g[i] * p) * min(sx[i], sy[i])
+        cone = max(cone, c)
+        d = qx * vx + qy * vy + g[i] * p * np.sqrt((sx[i] * vx) ** 2 + (sy[i] * vy) ** 2)
+        direc = max(direc, abs(d) * kT[i])
+        normal = max(normal, abs(min(kN[i] * w, p)))
+    if equilibrium:
+        m = 3 * n
+        for j in range(m):
+            acc = rb[j] - r[j]
+            for k in range(m):
+                uk = u[k]
+                if uk != 0.0:
+                    acc += Kn[j, k] * uk
+            eq = max(eq, abs(acc))
+    return cone / F, direc / (F * F), normal / F, eq / F
