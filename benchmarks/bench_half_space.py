@@ -117,14 +117,52 @@ def operator(ns, dense_max=32):
         print(f"| {n} | {n * n} | {3 * n * n} | {1e3 * t_fft:.2f} | {dense}")
 
 
+def matrix_free(ns, S=40, X=0.5, dense_max=16):
+    """Steady fretting cycle (Q oscillating at 0.5 f P, nu = 0, window 2.4 a) matrix-free, with the
+    dense cone engine beside it up to ``dense_max``: CPU time (robust to the shared machine's load)
+    and peak resident memory of this process."""
+    import resource
+
+    from shakedown.models.half_space.matrix_free import fretting_cycles_fft
+    from shakedown.studies import half_space as hs
+
+    mats = ((E, 0.0), (E, 0.0))
+    a = float(cont.hertz_radius(P, R, E / 2))
+    f = 0.5
+    t = (np.arange(S) + 1) / S
+    print("| n | cells | 2a/h | W / W_MD - 1 | cycles | FISTA iterations per step (median, max) "
+          "| CPU [s] FFT | CPU [s] dense (build + run) | W_fft / W_dense - 1 | peak RSS [MB] |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for n in ns:
+        m = sd.half_space_model(radius=R, n_cells=n, width=2.4 * a, friction=f, materials=mats)
+        c0 = time.process_time()
+        out = fretting_cycles_fft(m, P, X * f * P * np.cos(2 * np.pi * t), max_cycles=4, tol=1e-9)
+        c_fft = time.process_time() - c0
+        W_md = float(cont.mindlin_deresiewicz_dissipation(X * f * P, P, f, a,
+                                                          cont.tangential_compliance_constant(mats)))
+        dense = "- | -"
+        if n <= dense_max:
+            c0 = time.process_time()
+            run, _ = hs.fretting_run(m, P, X * f * P, steps_per_cycle=S, max_cycles=4)
+            c_dense = time.process_time() - c0
+            dense = f"{c_dense:.1f} | {out['W'][-1] / run.steady_dissipation - 1:+.1e}"
+        rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+        it = np.array(out["iterations"])
+        print(f"| {n} | {n * n} | {2 * a / m.h:.1f} | {out['W'][-1] / W_md - 1:+.2e} | {len(out['W'])} "
+              f"| {int(np.median(it))}, {it.max()} | {c_fft:.1f} | {dense} | {rss:.0f} |", flush=True)
+
+
 if __name__ == "__main__":
     ap = argparse.ArgumentParser()
-    ap.add_argument("what", choices=["hertz", "operator"])
+    ap.add_argument("what", choices=["hertz", "operator", "matrix_free"])
+    ap.add_argument("--ns", type=int, nargs="*", default=None)
     ap.add_argument("--quick", action="store_true")
     a = ap.parse_args()
     print(f"# OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS')}; "
           f"load: {os.getloadavg()}")
     if a.what == "hertz":
         hertz([15, 31] if a.quick else [15, 31, 63, 127, 255])
+    elif a.what == "operator":
+        operator(a.ns or ([8, 16] if a.quick else [8, 16, 24, 32, 48, 64, 128, 256]))
     else:
-        operator([8, 16] if a.quick else [8, 16, 24, 32, 48, 64, 128, 256])
+        matrix_free(a.ns or [16, 32, 64])

@@ -72,7 +72,7 @@ def plot_contact_map(model, q_full, p_full, states, *, a=None, c=None, arrows=Tr
 
     handles = [Patch(color=STATE_COLOURS[k], label=k) for k in ("stick", "slip", "open")]
     h2, _ = ax.get_legend_handles_labels()
-    ax.legend(handles=handles + h2, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.13),
+    ax.legend(handles=handles + h2, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16),
               ncol=3, frameon=False)
     z = L if zoom is None else zoom
     ax.set_xlim(-z, z)
@@ -97,7 +97,7 @@ def plot_stuck_zone(model, stuck_cells, *, a=None, c_pred=None, title=None, zoom
         _circle(ax, a, color="k", lw=1.0, ls="--", label=f"Hertz a = {a:.3g}")
     if c_pred is not None:
         _circle(ax, c_pred, color="tab:red", lw=1.4, label=f"predicted stick radius {c_pred:.3g}")
-    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2, frameon=False)
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2, frameon=False)
     z = L if zoom is None else zoom
     ax.set_xlim(-z, z)
     ax.set_ylim(-z, z)
