@@ -4,7 +4,8 @@ Imports :mod:`shakedown.model` (and the material checks of the half-plane model)
 :mod:`.influence`: closed-form cell influence coefficients; :mod:`.operators`: the compliance as
 an FFT convolution; :mod:`.model`: :func:`half_space_model`; :mod:`.continuum`: Hertz,
 Cattaneo-Mindlin and Mindlin-Deresiewicz; :mod:`.normal`: a frictionless normal solver
-(Polonsky-Keer).
+(Polonsky-Keer); :mod:`.matrix_free`: the fretting cycle of similar materials at constant ``P``
+with FFT products only (large grids).
 """
 
 from .model import DENSE_MAX_CELLS, HalfSpaceModel, gap_function, half_space_model
