@@ -132,7 +132,7 @@ def plot_load_path(Q, *, friction_P=None, ax=None):
     ax.plot(np.r_[Q[:, 0], Q[:1, 0]], np.r_[Q[:, 1], Q[:1, 1]], "o-", ms=3)
     if friction_P is not None:
         _circle(ax, friction_P, color="tab:red", lw=1, ls="--", label="|Q| = f P (gross slip)")
-        ax.legend(fontsize=8)
+        ax.legend(fontsize=8, loc="upper right")
     ax.set_aspect("equal")
     ax.set_xlabel(r"$Q_x$ [force]")
     ax.set_ylabel(r"$Q_y$ [force]")
