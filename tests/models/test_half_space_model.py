@@ -178,3 +178,24 @@ def test_dense_limit_and_bad_loads():
     big = model(int(np.sqrt(hs_model.DENSE_MAX_CELLS)) + 1)
     with pytest.raises(sd.InputError, match="stiffness_operator"):
         _ = big.stiffness
+
+
+def test_load_cycle_welded_reactions_and_samples_agree():
+    # the harmonic load at any t is the welded reaction of the resultants at t, and the sampled
+    # load interpolates the same values at its samples
+    m = model(5, materials=((E, NU), (np.inf, 0.0)))
+    P0, P1, Qx, Qy, ph = P, 0.3 * P, 0.2 * P, 0.1 * P, 0.6
+    load = m.load_cycle(P0=P0, P1=P1, Qx=Qx, Qy=Qy, phase=ph)
+    assert load.dim == 3 and load.q0.shape == (m.n_cells - 1, 2)
+    t = np.linspace(0, 1, 7, endpoint=False)
+    q, p = load.evaluate(t, 1.0)
+    qe, pe = m.welded(Qx * np.cos(2 * np.pi * t), Qy * np.sin(2 * np.pi * t),
+                      P0 + P1 * np.cos(2 * np.pi * t + ph))
+    scale = np.abs(pe).max()
+    np.testing.assert_allclose(q, qe, rtol=0, atol=1e-12 * scale)
+    np.testing.assert_allclose(p, pe, rtol=0, atol=1e-12 * scale)
+    samples = m.load_from_samples(P0, P1 * np.cos(2 * np.pi * t + ph), Qx * np.cos(2 * np.pi * t),
+                                  Qy * np.sin(2 * np.pi * t))
+    qs, ps = samples.evaluate(t, 1.0)
+    np.testing.assert_allclose(qs, qe, rtol=0, atol=1e-12 * scale)
+    np.testing.assert_allclose(ps, pe, rtol=0, atol=1e-12 * scale)
