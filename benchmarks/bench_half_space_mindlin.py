@@ -172,15 +172,40 @@ def part_uniqueness(n, X=0.5, k=6, seed=0, steps=40):
     return rows
 
 
+def part_pq(n, steps=40):
+    """P and Q varying together: P = P0 + 0.3 P0 cos(2 pi t + 0.6), Q_x = 0.3 f P0 cos 2 pi t."""
+    rows = []
+    print("| materials | beta | status | cycles to steady | W of the last 3 cycles | reference cell margin |")
+    print("|---|---|---|---|---|---|")
+    for label, mats in (("similar", ((E, 0.3), (E, 0.3))),
+                        ("rigid on nu=0.3", ((E, 0.3), (np.inf, 0.0)))):
+        a = _a(m_star(((E, 0.3), (E, 0.3))))
+        m = sd.half_space_model(radius=R, n_cells=n, width=2.4 * 1.3 ** (1 / 3) * a, friction=F,
+                                materials=mats)
+        load = m.load_cycle(P0=P, P1=0.3 * P, Qx=0.3 * F * P, phase=0.6)
+        run = sd.solve_cycles(m.system, load, 1.0, steps_per_cycle=steps, max_cycles=30, tol=1e-8)
+        Pt = lambda t: P + 0.3 * P * np.cos(2 * np.pi * t + 0.6)  # noqa: E731
+        t, qf, pf, _, Q = hs.run_arrays(m, run, Pt, lambda t: 0.3 * F * P * np.cos(2 * np.pi * t),
+                                        lambda t: 0 * t)
+        ok, worst = m.check_reference(qf[:, m.keep], pf[:, m.keep], Q[:, 0], Q[:, 1], Pt(t))
+        rows.append(dict(materials=label, beta=m.beta, status=run.status, cycles=run.cycles_to_steady,
+                         W=run.dissipation.tolist(), reference_ok=ok, margin=worst))
+        print(f"| {label} | {m.beta:.3f} | {run.status} | {run.cycles_to_steady} | "
+              f"{', '.join(f'{w:.6e}' for w in run.dissipation[-3:])} | "
+              f"{worst:.1e} ({'ok' if ok else 'FAILS'}) |")
+    return rows
+
+
 if __name__ == "__main__":
     ap = argparse.ArgumentParser()
-    ap.add_argument("part", choices=["cm", "md", "cubic", "rotating", "uniqueness"])
+    ap.add_argument("part", choices=["cm", "md", "cubic", "rotating", "uniqueness", "pq"])
     ap.add_argument("--ns", type=int, nargs="*", default=[11, 15, 21, 31])
     ap.add_argument("--n", type=int, default=21)
     a = ap.parse_args()
     print(f"# OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS')}; load {os.getloadavg()}")
     t0 = time.perf_counter()
     out = {"cm": lambda: part_cm(a.ns), "md": lambda: part_md(a.ns), "cubic": lambda: part_cubic(a.n),
-           "rotating": lambda: part_rotating(a.n), "uniqueness": lambda: part_uniqueness(a.n)}[a.part]()
+           "rotating": lambda: part_rotating(a.n), "uniqueness": lambda: part_uniqueness(a.n),
+           "pq": lambda: part_pq(a.n)}[a.part]()
     print(f"# total {time.perf_counter() - t0:.0f} s")
     (HERE / f"half_space_{a.part}.json").write_text(json.dumps(out, indent=1, default=float))
