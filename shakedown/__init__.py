@@ -50,6 +50,7 @@ _LAZY = {
     "gallery": None,
     "sweep": "studies.sweep",
     "half_plane_model": "models.half_plane",
+    "half_space_model": "models.half_space",
     "UncondensedSystem": "model.uncondensed",
 }
 

@@ -118,7 +118,7 @@ def _change(d, F, v1, w1, v0, w0):
     return float(np.max(d.kT * dv + d.kN * np.abs(w1 - w0), initial=0.0) / F)
 
 
-def _period(solver, c, v, w, qg, pg, U_prev):
+def _period(solver, c, v, w, qg, pg, U_prev, st0):
     """One period of implicit steps from ``(v, w)``; a CycleRecord (3-D shapes) and the
     increments ``U`` (steps, N, 3) for the next period's warm start."""
     n_steps, n = pg.shape
@@ -132,7 +132,7 @@ def _period(solver, c, v, w, qg, pg, U_prev):
     RB = np.empty((n_steps, n, 3))
     scales = np.empty(n_steps)
     V[0], Wg[0] = v, w
-    st[0] = np.where(w * solver.data.kN > 0, SEPARATED, 0)
+    st[0] = st0  # the state of the previous period's last step (as in 2-D)
     r0 = solver.base(v, qg[-1], pg[-1])  # the load at t = 0 (= t = 1 of the grid)
     r0 += (solver.data.Kn[:, 2::3] @ w).reshape(n, 3)
     Q[0], P[0] = r0[:, :2], r0[:, 2]
@@ -190,8 +190,9 @@ def _run(system, solver, load, lam, v0, w0, n_steps, max_cycles, tol, progress, 
     W_list, change, records, history = [], [], [], [] if record_history else None
     statuses: dict[str, int] = {}
     max_res, period, ok, fail_msg, U_prev = 0.0, 0, True, "", None
+    st0 = np.where(w * d.kN > 0, SEPARATED, 0).astype(np.int8)
     for c in range(1, max_cycles + 1):
-        rec, U = _period(solver, c, v, w, qg, pg, U_prev)
+        rec, U = _period(solver, c, v, w, qg, pg, U_prev, st0)
         for k_, m_ in (rec.statuses or {}).items():
             statuses[k_] = statuses.get(k_, 0) + m_
         max_res = max(max_res, rec.max_residual)
@@ -202,7 +203,7 @@ def _run(system, solver, load, lam, v0, w0, n_steps, max_cycles, tol, progress, 
         records = (records + [rec])[-2:]
         if history is not None:
             history.append(rec)
-        v, w = rec.v[-1].copy(), rec.w[-1].copy()
+        v, w, st0 = rec.v[-1].copy(), rec.w[-1].copy(), rec.states[-1].copy()
         W_list.append(rec.dissipation)
         change.append(_change(d, F, v, w, starts_v[-1], starts_w[-1]))
         starts_v.append(v.copy())

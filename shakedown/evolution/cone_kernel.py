@@ -55,9 +55,12 @@ def _reactions(Kn, rb, u, r):
 
 
 @njit(cache=True)
-def _classify(r, u, sx, sy, g, rhoT, rhoN, states, phi, nhat, cfac):
+def _classify(r, u, sx, sy, g, rhoT, rhoN, states, phi, nhat, cfac, slack):
     """States at the point ``(u, r)``, the AC residual ``phi`` (force units, (3N,)) and, per slip
-    node, ``n = t / |t|`` and ``c = g R / |t|``; returns ``sum phi^2``."""
+    node, ``n = t / |t|`` and ``c = g R / |t|``; returns ``sum phi^2``.  ``slack`` [force]: a
+    node whose trial traction exceeds the cone by at most this is taken as stuck (the 2-D active
+    set accepts the same, up to its feasibility tolerance, so that slips far below the
+    verification tolerance do not linger)."""
     n = g.size
     merit = 0.0
     for i in range(n):
@@ -76,7 +79,7 @@ def _classify(r, u, sx, sy, g, rhoT, rhoN, states, phi, nhat, cfac):
             ty = qty - rhoT[i] * sy[i] * vy
             tn = np.sqrt(tx * tx + ty * ty)
             rad = g[i] * R
-            if tn <= rad:
+            if tn <= rad + slack / min(sx[i], sy[i]):
                 states[i] = STICK
                 phi[3 * i] = sx[i] * (qtx - tx)  # = rho_T s^2 dv: a force
                 phi[3 * i + 1] = sy[i] * (qty - ty)
@@ -265,7 +268,8 @@ def _linear_solve(J, h, states, n, dense_max):
 
 
 @njit(cache=True)
-def newton(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, dense_max=DENSE_MAX):
+def newton(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, dense_max=DENSE_MAX,
+           slack=0.0):
     """Semismooth Newton on the Alart-Curnier equations from the guess ``u`` (in place).
 
     Parameters
@@ -287,6 +291,8 @@ def newton(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, dense_max
     max_iter : int
     dense_max : int
         Reduced systems up to this size by LU, larger ones by GMRES first.
+    slack : float
+        Stick acceptance beyond the cone [force] (see :func:`_classify`).
 
     Returns
     -------
@@ -307,7 +313,7 @@ def newton(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, dense_max
     dr = np.empty(3 * n)
     zero = np.zeros(3 * n)
     _reactions(Kn, rb, u, r)
-    merit = _classify(r, u, sx, sy, g, rhoT, rhoN, states, phi, nhat, cfac)
+    merit = _classify(r, u, sx, sy, g, rhoT, rhoN, states, phi, nhat, cfac, slack)
     it = 0
     while it < max_iter:
         if np.max(np.abs(phi)) <= tol:
@@ -324,7 +330,8 @@ def newton(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, dense_max
             for k in range(3 * n):
                 utry[k] = u[k] + alpha * unew[k]
                 rtry[k] = r[k] + alpha * dr[k]
-            mt = _classify(rtry, utry, sx, sy, g, rhoT, rhoN, st_try, phi_try, nh_try, cf_try)
+            mt = _classify(rtry, utry, sx, sy, g, rhoT, rhoN, st_try, phi_try, nh_try, cf_try,
+                           slack)
             if mt <= (1.0 - 1e-4 * alpha) * merit or (alpha == 1.0 and mt <= merit
                                                      and np.max(np.abs(phi_try)) <= tol):
                 accepted = True
@@ -345,7 +352,8 @@ def newton(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, dense_max
 
 
 @njit(cache=True)
-def gauss_seidel(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_sweeps, local_iter):
+def gauss_seidel(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_sweeps, local_iter,
+                 slack=0.0):
     """Projected block Gauss-Seidel (the fallback): each node's own 3 x 3 problem solved exactly
     by :func:`newton` with the other nodes frozen, sweeps until the global AC residual is below
     ``tol`` [force].  Converges for small enough friction; slow (linear) but independent of the
@@ -372,14 +380,14 @@ def gauss_seidel(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_sweeps, l
                     s -= Kl[a, b] * ul[b]
                 rbl[a] = s
             newton(Kl, rbl, sx[i:i + 1], sy[i:i + 1], g[i:i + 1], rhoT[i:i + 1],
-                   rhoN[i:i + 1], ul, rl, stl, 1e-3 * tol, local_iter)
+                   rhoN[i:i + 1], ul, rl, stl, 1e-3 * tol, local_iter, 10, slack)
             for b in range(3):
                 d = ul[b] - u[3 * i + b]
                 if d != 0.0:
                     for j in range(3 * n):
                         r[j] += Kn[3 * i + b, j] * d
                     u[3 * i + b] = ul[b]
-        _classify(r, u, sx, sy, g, rhoT, rhoN, states, phi, nhat, cfac)
+        _classify(r, u, sx, sy, g, rhoT, rhoN, states, phi, nhat, cfac, slack)
         res = np.max(np.abs(phi))
         if res <= tol:
             return CONVERGED, sweep + 1, res
@@ -388,3 +396,33 @@ def gauss_seidel(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_sweeps, l
 
 __all__ = ["newton", "gauss_seidel", "STICK", "SLIP", "SEPARATED", "HAVE_KERNEL", "CONVERGED",
            "STALLED", "MAX_ITER", "SINGULAR"]
+
+
+@njit(cache=True)
+def residuals(Kn, rb, sx, sy, g, kT, kN, u, r, F, equilibrium):
+    """The compiled twin of :func:`~.cone_step.verify_step` (the same four conditions, same
+    scaling; the step solver's per-step check): returns ``(cone, direction, normal,
+    equilibrium)``, each dimensionless (equilibrium 0 when not asked)."""
+    n = g.size
+    cone = 0.0
+    direc = 0.0
+    normal = 0.0
+    eq = 0.0
+    for i in range(n):
+        qx, qy, p = r[3 * i], r[3 * i + 1], r[3 * i + 2]
+        vx, vy, w = u[3 * i], u[3 * i + 1], u[3 * i + 2]
+        c = (np.sqrt((qx / sx[i]) ** 2 + (qy / sy[i]) ** 2) - g[i] * p) * min(sx[i], sy[i])
+        cone = max(cone, c)
+        d = qx * vx + qy * vy + g[i] * p * np.sqrt((sx[i] * vx) ** 2 + (sy[i] * vy) ** 2)
+        direc = max(direc, abs(d) * kT[i])
+        normal = max(normal, abs(min(kN[i] * w, p)))
+    if equilibrium:
+        m = 3 * n
+        for j in range(m):
+            acc = rb[j] - r[j]
+            for k in range(m):
+                uk = u[k]
+                if uk != 0.0:
+                    acc += Kn[j, k] * uk
+            eq = max(eq, abs(acc))
+    return cone / F, direc / (F * F), normal / F, eq / F

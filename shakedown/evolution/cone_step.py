@@ -27,6 +27,11 @@ from ..model.errors import InputError, ShapeError
 from . import cone_kernel as ck
 from .step_types import FEAS_TOL, StepResult
 
+#: A node whose trial traction leaves the cone by at most ``STICK_SLACK * feas_tol * F`` is
+#: solved as stuck (the 2-D active set accepts up to ``feas_tol * F``): slips far below the
+#: verification tolerance do not linger, and an embedded 2-D system takes the 2-D path.
+STICK_SLACK = 0.5
+
 #: State names of 3-D steps, indexed by the codes of :mod:`.cone_kernel` (2 is unused).
 STATE_NAMES_3D = ("stick", "slip", "unused", "separation")
 
@@ -43,7 +48,8 @@ class ConeStepResult(StepResult):
     Attributes
     ----------
     cone_residual : float
-        ``max_i max(0, |F_i^-1 q_i| - p_i) / F`` (cone feasibility, dimensionless).
+        ``max_i max(0, |F_i^-1 q_i| - p_i) min(f_x,i, f_y,i) / F`` (cone feasibility in force
+        units relative to ``F``: ``(|q_i| - f_i p_i) / F`` for isotropic friction, as in 2-D).
     direction_residual : float
         ``max_i k_i (q_i . dv_i + p_i |F_i dv_i|) / F^2``: zero iff each slipping node's reaction
         lies on the cone opposite to its slip (cone complementarity), dimensionless.
@@ -148,7 +154,8 @@ def verify_step(data: ConeData, rb, u, r, force_scale, equilibrium: bool = True)
     q, p = r[:, :2], r[:, 2]
     dv, w = u[:, :2], u[:, 2]
     S = np.column_stack([data.sx, data.sy])
-    cone = np.max(np.maximum(np.hypot(*(q / S).T) - data.g * p, 0.0), initial=0.0) / F
+    cone = np.max(np.maximum(np.hypot(*(q / S).T) - data.g * p, 0.0) * S.min(axis=1),
+                  initial=0.0) / F
     diss = np.einsum("ij,ij->i", q, dv) + data.g * p * np.hypot(*(S * dv).T)
     direction = np.max(np.abs(diss) * data.kT, initial=0.0) / F**2
     normal = np.max(np.abs(np.minimum(data.kN * w, p)), initial=0.0) / F
@@ -210,6 +217,7 @@ class ConeStepSolver:
         F = F if F > 0 else 1.0
         rbf = np.ascontiguousarray(rb, float).ravel()
         tol = 1e-3 * self.feas_tol * F
+        slack = STICK_SLACK * self.feas_tol * F
         r = np.empty(3 * n)
         st = np.empty(n, np.int8)
         tries = [("newton", u0), ("newton_cold", None)] if u0 is not None else [
@@ -219,9 +227,9 @@ class ConeStepSolver:
         for name, guess in tries:
             u = np.zeros(3 * n) if guess is None else np.array(guess, float).ravel()
             code, it, _ = ck.newton(d.Kn, rbf, d.sx, d.sy, d.g, self.rhoT, self.rhoN, u, r, st,
-                                    tol, self.max_iter, self.dense_max)
+                                    tol, self.max_iter, self.dense_max, slack)
             iters += it
-            res = verify_step(d, rbf, u, r, F, equilibrium)
+            res = self._verify(rbf, u, r, F, equilibrium)
             if best is None or res.worst < best[3].worst:
                 best = (u.copy(), r.copy(), st.copy(), res, name)
             if res.worst <= self.feas_tol:
@@ -232,15 +240,21 @@ class ConeStepSolver:
             self.totals["gauss_seidel"] += 1
             u = best[0].copy()
             code, it, _ = ck.gauss_seidel(d.Kn, rbf, d.sx, d.sy, d.g, self.rhoT, self.rhoN, u,
-                                          r, st, tol, 2000, 50)
+                                          r, st, tol, 2000, 50, slack)
             iters += it
-            res = verify_step(d, rbf, u, r, F, equilibrium)
+            res = self._verify(rbf, u, r, F, equilibrium)
             if res.worst < best[3].worst:
                 best = (u.copy(), r.copy(), st.copy(), res, "gauss_seidel")
         u, r, st, res, name = best
         self.totals["steps"] += 1
         self.totals["iterations"] += iters
         return u.reshape(n, 3), r.reshape(n, 3), st, name, iters, res, F
+
+    def _verify(self, rb, u, r, F, equilibrium):
+        """:func:`verify_step` by its compiled twin :func:`.cone_kernel.residuals`."""
+        d = self.data
+        return ConeResiduals(*ck.residuals(d.Kn, rb, d.sx, d.sy, d.g, d.kT, d.kN, u, r,
+                                           float(F), bool(equilibrium)))
 
     # ------------------------------------------------------------------ public step
     def solve(self, v_prev, q_w, p_w, guess=None) -> ConeStepResult:

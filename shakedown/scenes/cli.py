@@ -31,7 +31,7 @@ from pathlib import Path
 
 from ..model.errors import InputError, SceneError, ShakedownError
 
-ANALYSIS_COMMANDS = ("bounds", "cycles", "sweep", "stability")
+ANALYSIS_COMMANDS = ("bounds", "cycles", "sweep", "stability", "fretting")
 
 _SET_HELP = ("override an option (TOML value): an analysis option (--set lam=1.2, "
              "--set cycles.max_cycles=50) or a scene key (--set model.friction=0.4, "
@@ -43,6 +43,8 @@ _DESCRIPTIONS = {
     "sweep": "Monte Carlo study of a crack network: W* over realisations x lam x initial states.",
     "stability": "Critical friction mu* (MCEIP-mu) and growth rates s of the divergence "
                  "(MCEIP-lam). MCEIP: mixed complementarity eigenvalue problem.",
+    "fretting": "Steady fretting cycle of a half-space scene (sphere on flat): W per cycle, "
+                "contact maps, hysteresis loop, stuck zone.",
 }
 
 
@@ -51,6 +53,7 @@ _SHORT = {
     "cycles": "cyclic evolution: shakedown or cyclic slip, W per cycle",
     "sweep": "Monte Carlo study of a crack network",
     "stability": "critical friction mu* and growth rates s (MCEIP)",
+    "fretting": "steady fretting cycle of a sphere on a flat (half_space scenes)",
 }
 
 
@@ -81,7 +84,8 @@ def _parser() -> argparse.ArgumentParser:
     common(sub.add_parser(
         "run", help="run every analysis of a scene", formatter_class=fmt,
         description="Run every analysis of the scene's [analyses] tables (bounds if none).",
-        epilog="The options of each analysis: shakedown bounds|cycles|sweep|stability --help"))
+        epilog="The options of each analysis: shakedown bounds|cycles|sweep|stability|fretting "
+               "--help"))
     for name in ANALYSIS_COMMANDS:
         common(sub.add_parser(name, help=_SHORT[name],
                               description=_DESCRIPTIONS[name], epilog=options_help(name),

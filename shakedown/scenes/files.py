@@ -6,7 +6,7 @@ A scene has four tables::
     name = "two-node coupled"   # a plain name (no '/', '\\', ':', '..'): the output folder
 
     [model]                 # how to build the DiscreteSystem; `kind` picks the builder
-    kind = "matrices"       # "matrices" | "crack_network" | "fe" | "half_plane"
+    kind = "matrices"       # "matrices" | "crack_network" | "fe" | "half_plane" | "half_space"
     A = [[...]]             # builder-specific keys (see shakedown/scenes/builders/<kind>.py)
 
     [load]                  # the periodic welded reactions; keys depend on the model kind
@@ -43,6 +43,7 @@ MODEL_KINDS = {
     "crack_network": "shakedown.scenes.builders.crack_network",
     "fe": "shakedown.scenes.builders.fe",
     "half_plane": "shakedown.scenes.builders.half_plane",
+    "half_space": "shakedown.scenes.builders.half_space",
 }
 
 #: Analyses and the module that runs each.
@@ -51,6 +52,7 @@ ANALYSES = {
     "cycles": "shakedown.scenes.analyses.cycles",
     "sweep": "shakedown.scenes.analyses.sweep",
     "stability": "shakedown.scenes.analyses.stability",
+    "fretting": "shakedown.scenes.analyses.fretting",
 }
 
 TOP_LEVEL_TABLES = ("scene", "model", "load", "analyses")

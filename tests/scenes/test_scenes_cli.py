@@ -42,7 +42,7 @@ def test_builtin_scenes_load_and_build():
     assert "default" in names
     for name in names:
         sc = load_scene(name)
-        assert sc.model["kind"] in ("matrices", "crack_network", "fe", "half_plane")
+        assert sc.model["kind"] in ("matrices", "crack_network", "fe", "half_plane", "half_space")
 
 
 def test_scene_builds_the_same_system_as_python(tmp_path):

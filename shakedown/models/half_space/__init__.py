@@ -1,0 +1,13 @@
+"""Half-space frictional contact (MODEL.md s.8.5): sphere on flat and kin, 3-D discrete model.
+
+Imports :mod:`shakedown.model` (and the material checks of the half-plane model) only.
+:mod:`.influence`: closed-form cell influence coefficients; :mod:`.operators`: the compliance as
+an FFT convolution; :mod:`.model`: :func:`half_space_model`; :mod:`.continuum`: Hertz,
+Cattaneo-Mindlin and Mindlin-Deresiewicz; :mod:`.normal`: a frictionless normal solver
+(Polonsky-Keer); :mod:`.matrix_free`: the fretting cycle of similar materials at constant ``P``
+with FFT products only (large grids).
+"""
+
+from .model import DENSE_MAX_CELLS, HalfSpaceModel, gap_function, half_space_model
+
+__all__ = ["DENSE_MAX_CELLS", "HalfSpaceModel", "gap_function", "half_space_model"]

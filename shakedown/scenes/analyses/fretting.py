@@ -1,0 +1,117 @@
+"""The ``fretting`` analysis of a ``half_space`` scene: the steady cycle of a sphere on a flat.
+
+``[analyses.fretting]`` takes the scene's load (constant ``P0``; ``P1`` must be 0), reaches the
+steady cycle with :func:`shakedown.studies.half_space.fretting_run` from Mindlin's first loading
+(``P0``, then ``Q_x`` up to its amplitude) and writes
+
+* ``fretting.json`` -- ``W`` per cycle, the steady ``W``, periods to steady, the continuum
+  references (Hertz ``a``, Mindlin-Deresiewicz ``W`` and stick radius where they apply: an
+  oscillating load on similar materials), the reference cell check, a verdict;
+* ``steady_cycle.csv`` -- per instant and cell: ``t``, ``cell``, ``x``, ``y``, ``q_x``, ``q_y``,
+  ``p``, ``state``;
+* ``contact_maps.png`` (stick / slip / open with traction arrows at four instants),
+  ``stuck_zone.png``, ``hysteresis.png`` (``Q_x``-``delta_x`` and ``Q_x``-``Q_y``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from ...model.errors import SceneError
+
+OPTIONS = {
+    "steps_per_cycle": (int, 40, "implicit steps per load cycle (>= 4)"),
+    "max_cycles": (int, 10, "largest number of cycles simulated"),
+    "tol": (float, 1e-9, "relative change of the cycle-start state that counts as steady"),
+    "plots": (bool, True, "write PNG plots"),
+}
+
+
+def _load_amplitudes(ctx):
+    tab = ctx.scene.load if ctx.scene is not None else {}
+    if float(tab.get("P1", 0.0)) != 0.0:
+        raise SceneError("[analyses.fretting] needs a constant normal force: [load] P1 = 0")
+    return float(tab["P0"]), float(tab.get("Qx", 0.0)), float(tab.get("Qy", 0.0))
+
+
+def run(ctx, options: dict) -> dict:
+    from ...models.half_space import continuum as cont
+    from ...studies import half_space as hs
+
+    model = ctx.model
+    if not hasattr(model, "xy_cells"):
+        raise SceneError("[analyses.fretting] needs a scene of [model] kind = 'half_space'")
+    if options["steps_per_cycle"] < 4 or options["max_cycles"] < 1:
+        raise SceneError("[analyses.fretting] steps_per_cycle must be >= 4 and max_cycles >= 1")
+    P0, Qx, Qy = _load_amplitudes(ctx)
+    run_, loop = hs.fretting_run(model, P0, Qx, Qy, steps_per_cycle=options["steps_per_cycle"],
+                                 max_cycles=options["max_cycles"], tol=options["tol"])
+    qm = loop["q_full"][:, model.reference]
+    pm = loop["p_full"][:, model.reference]
+    ref_margin = float(np.max((np.linalg.norm(qm, axis=-1) - model.friction * pm) / P0))
+    f = model.friction
+    summary = {
+        "steady_dissipation": float(run_.steady_dissipation),
+        "dissipation_per_cycle": [float(w) for w in run_.dissipation],
+        "cycles_to_steady": int(run_.cycles_to_steady), "period": int(run_.period),
+        "status": str(run_.status), "n_stuck_cells": int(len(run_.stuck_nodes)) + 1,
+        "reference_cell_margin": ref_margin, "reference_cell_ok": bool(ref_margin <= 1e-9),
+        "W_loop": float(loop["W_loop"]),
+    }
+    a = c = None
+    if model.profile == "sphere" and model.beta == 0:
+        a = float(cont.hertz_radius(P0, model.radius, model.e_star))
+        summary["hertz_radius"] = a
+        if Qy == 0 and abs(Qx) < f * P0:
+            mats = getattr(model, "materials", None)
+            c = float(cont.cattaneo_mindlin_radius(Qx, P0, f, a))
+            summary["mindlin_stick_radius"] = c
+            if mats is not None:
+                ct = cont.tangential_compliance_constant(mats)
+                summary["mindlin_deresiewicz_W"] = float(
+                    cont.mindlin_deresiewicz_dissipation(Qx, P0, f, a, ct))
+    verdict = (f"steady cycle after {run_.cycles_to_steady} cycle(s): W = {run_.steady_dissipation:.4g} "
+               f"per cycle, {summary['n_stuck_cells']} of {model.n_cells} cells stuck throughout")
+    if "mindlin_deresiewicz_W" in summary:
+        verdict += (f"; Mindlin-Deresiewicz W = {summary['mindlin_deresiewicz_W']:.4g} "
+                    f"({run_.steady_dissipation / summary['mindlin_deresiewicz_W'] - 1:+.1%})")
+    if not summary["reference_cell_ok"]:
+        verdict += "; WARNING: the reference cell slips or opens (the model is not exact)"
+    summary = {"verdict": verdict, **summary}
+    ctx.output.write_json("fretting.json", summary)
+    T, Nc = loop["p_full"].shape
+    ctx.output.write_table("steady_cycle.csv", pd.DataFrame({
+        "t": np.repeat(loop["t"], Nc), "cell": np.tile(np.arange(1, Nc + 1), T),
+        "x": np.tile(model.xy_cells[:, 0], T), "y": np.tile(model.xy_cells[:, 1], T),
+        "q_x": loop["q_full"][..., 0].ravel(), "q_y": loop["q_full"][..., 1].ravel(),
+        "p": loop["p_full"].ravel(), "state": np.asarray(loop["states"]).ravel()}))
+    if options["plots"]:
+        _plots(ctx, model, run_, loop, a, c, f * P0)
+    return {k: summary[k] for k in ("verdict", "steady_dissipation", "cycles_to_steady", "status")}
+
+
+def _plots(ctx, model, run_, loop, a, c, fP):
+    import matplotlib.pyplot as plt
+
+    from ...plotting import half_space as ph
+
+    zoom = 1.15 * a if a is not None else None
+    T = len(loop["t"])
+    fig, axs = plt.subplots(1, 4, figsize=(18, 4.8))
+    for ax, k in zip(axs, (T - 1, T // 4, T // 2 - 1, 3 * T // 4), strict=True):
+        Qk = loop["Q"][k]
+        ph.plot_contact_map(model, loop["q_full"][k], loop["p_full"][k], loop["states"][k], a=a,
+                            zoom=zoom, ax=ax,
+                            title=f"t = {loop['t'][k]:.3f}: Q = ({Qk[0]:.3g}, {Qk[1]:.3g})")
+    fig.tight_layout()
+    ctx.output.save_figure("contact_maps.png", fig)
+    fig, ax = plt.subplots(figsize=(5, 5))
+    cells = np.r_[model.keep[np.asarray(run_.stuck_nodes, int)], model.reference]
+    ph.plot_stuck_zone(model, cells, a=a, c_pred=c, zoom=zoom, ax=ax)
+    ctx.output.save_figure("stuck_zone.png", fig)
+    fig, axs = plt.subplots(1, 2, figsize=(11, 4.2))
+    ph.plot_hysteresis(loop["Q"], loop["delta"], ax=axs[0])
+    ph.plot_load_path(loop["Q"], friction_P=fP, ax=axs[1])
+    fig.tight_layout()
+    ctx.output.save_figure("hysteresis.png", fig)

@@ -1,0 +1,239 @@
+"""The 3-D implicit step (MODEL.md s.8.4): cone complementarity solved by the semismooth Newton
+method of shakedown/evolution/cone_kernel.py and verified by cone_step.verify_step.
+
+What these tests prove: the verifier rejects each kind of wrong answer (outside the cone, slip
+along the traction, gap with pressure, broken equilibrium); the solver agrees with an independent
+convex solver (cvxpy/Clarabel SOCP) on uncoupled steps and with a single-node closed form; its
+answers scale exactly with the units; the fallbacks (cold restart, block Gauss-Seidel) produce
+verified answers; statuses follow the 3-D sufficient friction bound, which is itself checked
+against the exact 2-D single-node value; bad input is refused by name.
+"""
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import shakedown as sd
+from shakedown.evolution import cone_kernel as ck
+from shakedown.evolution.cone_step import ConeStepSolver, verify_step
+from shakedown.model.errors import InputError, ShapeError
+
+
+def random_3d(n, seed, friction=0.3, coupling=0.3, separation=False):
+    """A random SPD 3-D system (well conditioned) and a random step's welded reactions."""
+    rng = np.random.default_rng(seed)
+    M = rng.normal(size=(3 * n, 3 * n))
+    K = M @ M.T / (3 * n) + np.eye(3 * n)
+    s = sd.DiscreteSystem(K[:2 * n, :2 * n], coupling * K[:2 * n, 2 * n:], K[2 * n:, 2 * n:],
+                          friction=friction, dim=3)
+    q_w = rng.normal(size=(n, 2))
+    p_w = 0.5 + rng.random(n)
+    if separation:
+        p_w[: max(1, n // 4)] = -0.3  # pulled open
+    return s, rng.normal(size=(n, 2)) * 0.1, q_w, p_w
+
+
+def _slipping_answer():
+    s, v, q_w, p_w = random_3d(6, 1)
+    sol = ConeStepSolver(s)
+    r = sol.solve(v, q_w, p_w)
+    assert r.success and np.any(r.states == ck.SLIP)
+    return s, sol, v, q_w, p_w, r
+
+
+def test_verifier_accepts_the_answer_and_rejects_each_kind_of_wrong_answer():
+    s, sol, v, q_w, p_w, r = _slipping_answer()
+    d = sol.data
+    rb = sol.base(v, q_w, p_w)
+    u = np.column_stack([r.slip_increment, r.gap])
+    R = np.column_stack([r.q, r.p])
+    F = r.force_scale
+    assert verify_step(d, rb, u, R, F).worst <= 1e-12
+    j = int(np.flatnonzero(r.states == ck.SLIP)[0])
+    tol = sol.feas_tol
+    # slip along the traction instead of against it (reactions consistent with K)
+    u2 = u.copy()
+    u2[j, :2] *= -1
+    res = verify_step(d, rb, u2, rb + (d.Kn @ u2.ravel()).reshape(-1, 3), F)
+    assert res.direction > 1e3 * tol or res.cone > 1e3 * tol
+    # the reaction pushed out of the cone (equilibrium not checked here)
+    R2 = R.copy()
+    R2[j, :2] *= 1.01
+    assert verify_step(d, rb, u, R2, F, equilibrium=False).cone > 1e3 * tol
+    # a slip rotated by 90 degrees with the reactions kept: direction residual
+    u3 = u.copy()
+    u3[j, :2] = [-u[j, 1], u[j, 0]]
+    assert verify_step(d, rb, u3, R, F, equilibrium=False).direction > 1e3 * tol
+    # an open gap under pressure
+    u4 = u.copy()
+    u4[0, 2] = 0.1 * F / d.kN[0]
+    assert verify_step(d, rb, u4, R, F, equilibrium=False).normal > 1e3 * tol
+    # broken equilibrium
+    R5 = R.copy()
+    R5[-1, 2] += 1e-6 * F
+    res = verify_step(d, rb, u, R5, F)
+    assert res.equilibrium > 1e2 * tol and res.worst > tol
+
+
+def test_compiled_verifier_equals_the_numpy_one_on_right_and_wrong_answers():
+    s, sol, v, q_w, p_w, r = _slipping_answer()
+    rb = sol.base(v, q_w, p_w)
+    rng = np.random.default_rng(0)
+    u = np.column_stack([r.slip_increment, r.gap])
+    for k in range(5):
+        uk = u + (k > 0) * 1e-3 * rng.normal(size=u.shape)
+        Rk = rb + (sol.data.Kn @ uk.ravel()).reshape(-1, 3) + (k > 2) * 1e-4
+        a = verify_step(sol.data, rb, uk, Rk, r.force_scale)
+        b = sol._verify(rb.ravel(), uk.ravel(), Rk.ravel(), r.force_scale, True)
+        np.testing.assert_allclose([b.cone, b.direction, b.normal, b.equilibrium],
+                                   [a.cone, a.direction, a.normal, a.equilibrium],
+                                   rtol=1e-9, atol=1e-15)
+        assert (a.worst > 1e-6) == (k > 0)
+
+
+def test_a_failing_answer_gets_status_failed():
+    s, sol, v, q_w, p_w, r = _slipping_answer()
+    rb = sol.base(v, q_w, p_w)
+    u = np.column_stack([r.slip_increment, r.gap])
+    u[0, :2] += 1e-3  # not a solution
+    R = rb + (sol.data.Kn @ u.ravel()).reshape(-1, 3)
+    res = verify_step(sol.data, rb, u, R, r.force_scale)
+    out = sol.result(v, u, R, r.active_set, "newton", 1, res, r.force_scale)
+    assert not out.success and out.status == "failed" and "no verified solution" in out.message
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_uncoupled_step_equals_the_convex_minimisation_solved_by_clarabel(seed):
+    """B = 0 and every node closed: the step is ``min 1/2 dv^T A dv + qb . dv + sum p_i
+    |F_i dv_i|`` (p known), an SOCP solved independently by cvxpy with Clarabel."""
+    cvxpy = pytest.importorskip("cvxpy")
+    n = 8
+    s, v, q_w, p_w = random_3d(n, seed, coupling=0.0)
+    fx = np.random.default_rng(seed).uniform(0.2, 0.6, (n, 2))
+    s = s.with_friction(fx)
+    sol = ConeStepSolver(s)
+    r = sol.solve(v, q_w, p_w)
+    assert r.success and r.status == "unique"
+    A = np.asarray(s.A)
+    qb = (q_w + (A @ v.ravel()).reshape(n, 2)).ravel()
+    x = cvxpy.Variable(2 * n)
+    cost = 0.5 * cvxpy.quad_form(x, cvxpy.psd_wrap(A)) + qb @ x
+    cost += sum(p_w[i] * cvxpy.norm(cvxpy.multiply(fx[i], x[2 * i:2 * i + 2]))
+                for i in range(n))
+    cvxpy.Problem(cvxpy.Minimize(cost)).solve(solver="CLARABEL", tol_gap_abs=1e-10,
+                                              tol_gap_rel=1e-10, tol_feas=1e-10)
+    scale = np.abs(qb).max() / np.diag(A).min()
+
+    def J(dv):
+        return 0.5 * dv @ A @ dv + qb @ dv + sum(
+            p_w[i] * np.hypot(*(fx[i] * dv[2 * i:2 * i + 2])) for i in range(n))
+
+    # ours is the minimiser: its cost is not above Clarabel's (interior point, ~1e-7 accurate)
+    assert J(r.slip_increment.ravel()) <= J(x.value) + 1e-12 * np.abs(qb).max() * scale
+    np.testing.assert_allclose(r.slip_increment.ravel(), x.value, rtol=0, atol=1e-5 * scale)
+    assert np.any(r.states == ck.SLIP) and np.any(r.states == ck.STICK)
+
+
+def test_single_isotropic_node_closed_form():
+    """A = k I, B = 0, p = P, q = q_w + k dv (MODEL.md s.8 signs): from v = 0 under q_w = Q e
+    with Q > f P the node slips by dv = -(Q - f P) / k e and q = f P e, opposite to dv."""
+    k, f, P, Q = 3.0, 0.4, 2.0, 1.5
+    s = sd.DiscreteSystem(k * np.eye(2), np.zeros((2, 1)), [[5.0]], friction=f, dim=3)
+    e = np.array([0.6, -0.8])
+    r = ConeStepSolver(s).solve(np.zeros((1, 2)), [Q * e], [P])
+    np.testing.assert_allclose(r.slip_increment[0], -(Q - f * P) / k * e, rtol=1e-12)
+    np.testing.assert_allclose(r.q[0], f * P * e, rtol=1e-12)
+    assert r.state_names[0] == "slip" and r.gap[0] == 0
+
+
+def test_separation_and_the_gauss_seidel_fallback_give_verified_answers():
+    s, v, q_w, p_w = random_3d(10, 4, separation=True)
+    sol = ConeStepSolver(s)
+    r = sol.solve(v, q_w, p_w)
+    assert r.success and np.any(r.states == ck.SEPARATED)
+    assert np.all(r.p[r.states == ck.SEPARATED] <= 1e-12)
+    # Newton allowed 1 iteration cannot finish: the block Gauss-Seidel fallback must
+    sol1 = ConeStepSolver(s, max_iter=1)
+    r1 = sol1.solve(v, q_w, p_w)
+    assert sol1.totals["gauss_seidel"] == 1 and r1.method == "gauss_seidel" and r1.success
+    np.testing.assert_allclose(r1.slip, r.slip, rtol=0, atol=1e-7 * r.force_scale)
+
+
+def test_gmres_and_lu_paths_agree():
+    s, v, q_w, p_w = random_3d(40, 5)
+    a = ConeStepSolver(s, dense_max=10 ** 6).solve(v, q_w, p_w)
+    b = ConeStepSolver(s, dense_max=4).solve(v, q_w, p_w)
+    assert a.success and b.success
+    np.testing.assert_allclose(a.q, b.q, rtol=0, atol=1e-10 * a.force_scale)
+
+
+@settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 2**31), fexp=st.integers(-6, 12), kexp=st.integers(-6, 12))
+def test_step_answers_scale_with_the_units(seed, fexp, kexp):
+    """Forces x 10^a, stiffness x 10^b: slips x 10^(a - b), reactions x 10^a, same states."""
+    s, v, q_w, p_w = random_3d(5, seed, separation=seed % 2 == 0)
+    r = ConeStepSolver(s).solve(v, q_w, p_w)
+    a, b = 10.0 ** fexp, 10.0 ** kexp
+    s2 = sd.DiscreteSystem(b * s.A, b * s.B, b * s.C, friction=s.friction, dim=3)
+    r2 = ConeStepSolver(s2).solve(v * a / b, q_w * a, p_w * a)
+    assert r.success and r2.success
+    np.testing.assert_array_equal(r.states, r2.states)
+    np.testing.assert_allclose(r2.slip * b / a, r.slip, rtol=0, atol=1e-9 * np.abs(r.slip).max())
+    np.testing.assert_allclose(r2.q / a, r.q, rtol=0, atol=1e-9 * r.force_scale)
+
+
+def test_statuses_follow_the_sufficient_friction_bound():
+    s, v, q_w, p_w = random_3d(4, 6, coupling=0.8)
+    crit = s.critical_friction()
+    assert crit.method == "sufficient-bound-3d" and not crit.exact and np.isfinite(crit.factor)
+    low = s.with_friction(0.5 * crit.value)
+    high = s.with_friction(1.5 * crit.value)
+    assert low.critical_friction().well_posed and not high.critical_friction().well_posed
+    assert ConeStepSolver(low).solve(v, q_w, p_w).status == "unique"
+    r = ConeStepSolver(high).solve(v, q_w, p_w)
+    assert r.status in ("solved", "failed")
+    assert sd.DiscreteSystem(s.A, 0 * s.B, s.C, friction=0.9, dim=3).critical_friction().method \
+        == "uncoupled"
+
+
+@pytest.mark.parametrize("a,b,c", [(2.0, 0.5, 1.0), (1.0, 0.7, 1.0), (1.0, 1 / np.sqrt(2), 1.0)])
+def test_3d_bound_never_exceeds_the_exact_2d_single_node_value(a, b, c):
+    """A node whose y direction is unloaded and uncoupled: the sufficient 3-D bound
+    ``2 sqrt(a c - b^2) / c`` is at most the exact 2-D critical friction ``a / |b|``, with
+    equality when ``a c = 2 b^2`` (the proof in shakedown/model/critical3d.py)."""
+    s = sd.DiscreteSystem(np.diag([a, a]), [[b], [0.0]], [[c]], friction=1.0, dim=3)
+    val = s.critical_friction().value
+    np.testing.assert_allclose(val, 2 * np.sqrt(a * c - b * b) / c, rtol=1e-12)
+    assert val <= a / abs(b) * (1 + 1e-12)
+    if np.isclose(a * c, 2 * b * b):
+        np.testing.assert_allclose(val, a / abs(b), rtol=1e-9)
+
+
+def test_below_the_bound_every_start_finds_the_same_answer():
+    """Uniqueness evidence: cold Newton, warm Newton from a far guess and block Gauss-Seidel
+    reach one answer for a coupled system below the 3-D bound."""
+    s, v, q_w, p_w = random_3d(6, 7, coupling=0.6)
+    s = s.with_friction(0.9 * s.critical_friction().value)
+    sol = ConeStepSolver(s)
+    r0 = sol.solve(v, q_w, p_w)
+    far = np.random.default_rng(0).normal(size=(6, 3))
+    far[:, 2] = np.abs(far[:, 2])
+    r1 = sol.solve(v, q_w, p_w, guess=far)
+    r2 = ConeStepSolver(s, max_iter=1).solve(v, q_w, p_w)
+    for r in (r1, r2):
+        assert r.success
+        np.testing.assert_allclose(r.slip, r0.slip, rtol=0, atol=1e-7 * np.abs(r0.slip).max())
+
+
+def test_bad_input_is_refused_by_name():
+    s, v, q_w, p_w = random_3d(3, 8)
+    sol = ConeStepSolver(s)
+    with pytest.raises(ShapeError, match="q_w"):
+        sol.solve(v, q_w[:, 0], p_w)
+    with pytest.raises(ShapeError, match="v_prev"):
+        sol.solve(v.ravel(), q_w, p_w)
+    with pytest.raises(InputError, match="finite"):
+        sol.solve(v, q_w * np.nan, p_w)
+    with pytest.raises(InputError, match="f_x and f_y"):
+        ConeStepSolver(s.with_friction([[0.3, 0.0], [0.3, 0.3], [0.3, 0.3]]))
