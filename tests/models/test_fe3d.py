@@ -163,6 +163,13 @@ def test_mirror_symmetric_bodies_are_uncoupled(element):
     cm = model(mat)
     assert set(cm.node_kind) == {"interface"}
     assert np.abs(cm.B).max() <= 1e-13 * np.abs(cm.K).max()
+    # two springs in series: the relative displacement's compliance is body a's compliance on a
+    # rigid obstacle plus its mirror image's, whose normal component changes sign (E)
+    Ka = fe.FEModel(a, mat, dirichlet=["top"], contact=["bottom"]).condense().K
+    Ea = np.diag(np.r_[np.ones(2 * cm.n_nodes), -np.ones(cm.n_nodes)])
+    Ca = np.linalg.inv(Ka)
+    np.testing.assert_allclose(np.linalg.inv(Ca + Ea @ Ca @ Ea), cm.K, rtol=0,
+                               atol=1e-11 * np.abs(cm.K).max())
     coupled = model(fe.isotropic(3 * E, 0.1, plane="3d"))
     assert np.abs(coupled.B).max() > 1e-3 * np.abs(coupled.K).max()
 
