@@ -33,6 +33,7 @@ from ..model.errors import InputError, ShapeError
 from ..model.loading import LoadCycle
 from ..model.sparse import abs_max
 from ..model.system import DiscreteSystem
+from ..model.validation import check_same_dimension, require_two_dimensional
 
 
 @dataclass(frozen=True)
@@ -163,6 +164,8 @@ def _check_pair(system, load):
             f"load has {load.n_nodes} nodes but system has {system.n_nodes}; "
             "build the LoadCycle with one entry per contact node"
         )
+    check_same_dimension(system, load)
+    require_two_dimensional(system, "the hyperplane bounds engine (2-D)")
 
 
 def _check_lam(lam) -> float:

@@ -48,7 +48,7 @@ from ..model.errors import InputError, ShapeError
 from ..model.schur import SchurStiffness
 from ..model.system import DiscreteSystem
 from ..model.threads import single_blas_thread
-from ..model.validation import check_node_vector
+from ..model.validation import check_node_vector, require_two_dimensional
 from .active_set import ActiveSet
 from .factors import FactorCache
 from .fallbacks import Fallbacks
@@ -122,6 +122,7 @@ class StepSolver(FactorCache, ActiveSet, Fallbacks):
                  kernel: bool = True):
         if not isinstance(system, DiscreteSystem):
             raise InputError(f"system must be a DiscreteSystem; got {type(system).__name__}")
+        require_two_dimensional(system, "the 2-D step solver (StepSolver)")
         if not (np.isfinite(feas_tol) and 0 < feas_tol < 1):
             raise InputError(f"feas_tol must be in (0, 1); got {feas_tol}")
         self.system = system

@@ -15,12 +15,16 @@ from .errors import InputError, ShapeError
 from .validation import check_count, real_array
 
 
-def _vector(name: str, value, n: int | None) -> np.ndarray:
+def _vector(name: str, value, n: int | None, *, tangential: bool = False) -> np.ndarray:
+    """One entry per node: shape (N,); a tangential ``q0`` may also be (N, 2) (3-D)."""
     arr = real_array(name, value)
-    if arr.ndim == 1 and arr.shape[0] == 0:
+    if arr.ndim in (1, 2) and arr.shape[0] == 0:
         raise ShapeError(f"{name} is empty: a load needs at least one node (N >= 1)")
-    if arr.ndim != 1 or (n is not None and arr.shape != (n,)):
+    three_d = tangential and arr.ndim == 2 and arr.shape[1:] == (2,)
+    if (arr.ndim != 1 and not three_d) or (n is not None and arr.shape[0] != n):
         want = f"({n},)" if n is not None else "(N,)"
+        if tangential:
+            want += f" (2-D) or {want[:-2]}, 2) (3-D: q_x, q_y per node)"
         raise ShapeError(f"{name} must have shape {want}; got shape {arr.shape}")
     if not np.all(np.isfinite(arr)):
         raise InputError(f"{name} must be finite; got {arr[~np.isfinite(arr)][0]}")
@@ -29,23 +33,28 @@ def _vector(name: str, value, n: int | None) -> np.ndarray:
 
 def _static_pair(q0, p0) -> tuple[np.ndarray, np.ndarray]:
     """``q0`` and ``p0``, one entry per node each; a length mismatch names both (issue 9)."""
-    q0, p0 = _vector("q0", q0, None), _vector("p0", p0, None)
-    if q0.shape != p0.shape:
+    q0, p0 = _vector("q0", q0, None, tangential=True), _vector("p0", p0, None)
+    if q0.shape[0] != p0.shape[0]:
         raise ShapeError(
-            f"q0 has {q0.size} entries but p0 has {p0.size}: both need one entry per node; "
+            f"q0 has {q0.shape[0]} entries but p0 has {p0.shape[0]}: both need one entry per node; "
             "fix the one whose length is not the number of nodes"
         )
     return q0, p0
 
 
-def _table(name: str, value, n: int, *, allow_1d: bool) -> np.ndarray:
+def _table(name: str, value, n: int, *, allow_1d: bool, comp: tuple = ()) -> np.ndarray:
+    """Rows of per-node values, shape (rows, N) + comp; ``comp = (2,)`` for 3-D tangential
+    arrays.  With ``allow_1d`` a single row (N,) + comp is accepted."""
     arr = real_array(name, value)
-    if arr.ndim == 1 and allow_1d:
-        arr = arr[None, :]
-    if arr.ndim != 2 or arr.shape[1] != n:
-        shapes = f"({n},) or (n_harmonics, {n})" if allow_1d else f"(n_samples, {n})"
-        raise ShapeError(f"{name} must have shape {shapes} (N = {n} nodes, the length of q0); "
-                         f"got shape {np.shape(value)}")
+    if arr.ndim == 1 + len(comp) and allow_1d:
+        arr = arr[None]
+    if arr.ndim != 2 + len(comp) or arr.shape[1:] != (n,) + comp:
+        row = ", ".join([str(n)] + [str(c) for c in comp])
+        shapes = (f"({row}{',' if not comp else ''}) or (n_harmonics, {row})" if allow_1d
+                  else f"(n_samples, {row})")
+        dim = " (dim = 3: q arrays carry (q_x, q_y) per node, p arrays one value)" if comp else ""
+        raise ShapeError(f"{name} must have shape {shapes} (N = {n} nodes, the length of q0)"
+                         f"{dim}; got shape {np.shape(value)}")
     if not np.all(np.isfinite(arr)):
         raise InputError(f"{name} must be finite; got {arr[~np.isfinite(arr)][0]}")
     return arr
@@ -63,14 +72,19 @@ class LoadCycle:
     Build with :meth:`from_harmonics` or :meth:`from_samples`.  Forces are in the same units as
     ``K @ displacement`` (force per unit thickness for 2-D models).
 
+    Three dimensions (MODEL.md s.8.1): the tangential arrays carry ``(q_x, q_y)`` per node in a
+    trailing axis of length 2 (``q0`` of shape (N, 2), ``q_cos`` (H, N, 2), ``q1`` (S, N, 2));
+    the normal arrays keep their 2-D shapes.  The dimension follows from ``q0``:
+    :attr:`dim` is 3 when ``q0`` has shape (N, 2).
+
     Attributes
     ----------
-    q0, p0 : ndarray, shape (N,)
+    q0, p0 : ndarray, shape (N,) (``q0``: (N, 2) in 3-D)
         Static welded tangential and normal reactions (compression positive).
     kind : {"harmonic", "samples"}
-    q_cos, q_sin, p_cos, p_sin : ndarray, shape (H, N)
+    q_cos, q_sin, p_cos, p_sin : ndarray, shape (H, N) (``q_*``: (H, N, 2) in 3-D)
         Harmonic coefficients (``kind == "harmonic"``); harmonic ``k`` has frequency ``k + 1``.
-    q1, p1 : ndarray, shape (S, N)
+    q1, p1 : ndarray, shape (S, N) (``q1``: (S, N, 2) in 3-D)
         Samples of the periodic part at ``t = k / S`` (``kind == "samples"``).
     """
 
@@ -92,18 +106,22 @@ class LoadCycle:
         ``q_w(t) = q0 + lam * sum_k (q_cos[k] cos(2 pi (k+1) t) + q_sin[k] sin(2 pi (k+1) t))``
         and the same for ``p``.  Each coefficient array has shape ``(N,)`` (one harmonic) or
         ``(n_harmonics, N)``; omitted arrays are zero.  Arrays with fewer harmonics are
-        zero-padded.
+        zero-padded.  In 3-D (``q0`` of shape (N, 2)) ``q_cos`` and ``q_sin`` have shape
+        ``(N, 2)`` or ``(n_harmonics, N, 2)``; ``p_cos``, ``p_sin`` keep ``(N,)`` or
+        ``(n_harmonics, N)``.
         """
         q0, p0 = _static_pair(q0, p0)
         n = q0.shape[0]
+        qc = q0.shape[1:]  # () in 2-D, (2,) in 3-D
         given = {"q_cos": q_cos, "q_sin": q_sin, "p_cos": p_cos, "p_sin": p_sin}
         tables = {
-            k: _table(k, v, n, allow_1d=True) for k, v in given.items() if v is not None
+            k: _table(k, v, n, allow_1d=True, comp=qc if k[0] == "q" else ())
+            for k, v in given.items() if v is not None
         }
         h = max([t.shape[0] for t in tables.values()], default=1)
         full = {}
         for k in given:
-            t = np.zeros((h, n))
+            t = np.zeros((h, n) + (qc if k[0] == "q" else ()))
             if k in tables:
                 t[: tables[k].shape[0]] = tables[k]
             full[k] = t
@@ -112,16 +130,17 @@ class LoadCycle:
 
     @classmethod
     def from_samples(cls, q0, p0, q1, p1):
-        """Periodic part from samples ``q1[k], p1[k]`` at ``t = k / n_samples``, shape (S, N).
+        """Periodic part from samples ``q1[k], p1[k]`` at ``t = k / n_samples``, shape (S, N)
+        (``q1``: (S, N, 2) in 3-D).
 
         Between samples the load is linear; the cycle closes from the last sample back to the
         first.  At least two samples are needed.
         """
         q0, p0 = _static_pair(q0, p0)
         n = q0.shape[0]
-        q1 = _table("q1", q1, n, allow_1d=False)
+        q1 = _table("q1", q1, n, allow_1d=False, comp=q0.shape[1:])
         p1 = _table("p1", p1, n, allow_1d=False)
-        if q1.shape != p1.shape:
+        if q1.shape[:2] != p1.shape:
             raise ShapeError(f"q1 and p1 must have the same shape; got {q1.shape} and {p1.shape}")
         if q1.shape[0] < 2:
             raise InputError(f"from_samples needs at least 2 samples per period; got {q1.shape[0]}")
@@ -131,13 +150,18 @@ class LoadCycle:
     @classmethod
     def static(cls, q0, p0):
         """A load with no periodic part."""
-        q0 = _vector("q0", q0, None)
+        q0 = _vector("q0", q0, None, tangential=True)
         return cls.from_harmonics(q0, p0)
 
     # ------------------------------------------------------------------ basic queries
     @property
     def n_nodes(self) -> int:
         return self.q0.shape[0]
+
+    @property
+    def dim(self) -> int:
+        """2 (one tangential component per node) or 3 (``q0`` of shape (N, 2))."""
+        return 3 if self.q0.ndim == 2 else 2
 
     @property
     def n_harmonics(self) -> int:
@@ -163,13 +187,18 @@ class LoadCycle:
         return np.zeros(0)
 
     def periodic(self, t):
-        """Periodic part ``(q1(t), p1(t))``, each of shape ``np.shape(t) + (N,)``."""
+        """Periodic part ``(q1(t), p1(t))``, each of shape ``np.shape(t) + (N,)`` (``q1``:
+        ``np.shape(t) + (N, 2)`` in 3-D)."""
         t = np.asarray(t, dtype=float)
         if self.kind == "harmonic":
             k = np.arange(1, self.n_harmonics + 1)
             ang = 2 * np.pi * t[..., None] * k  # (..., H)
             c, s = np.cos(ang), np.sin(ang)
-            q = c @ self.q_cos + s @ self.q_sin
+            if self.dim == 3:
+                q = np.tensordot(c, self.q_cos, axes=(-1, 0)) + np.tensordot(s, self.q_sin,
+                                                                             axes=(-1, 0))
+            else:
+                q = c @ self.q_cos + s @ self.q_sin
             p = c @ self.p_cos + s @ self.p_sin
             return q, p
         S = self.n_samples
@@ -177,7 +206,8 @@ class LoadCycle:
         i0 = np.floor(x).astype(int) % S
         frac = (x - np.floor(x))[..., None]
         i1 = (i0 + 1) % S
-        q = (1 - frac) * self.q1[i0] + frac * self.q1[i1]
+        fq = frac[..., None] if self.dim == 3 else frac
+        q = (1 - fq) * self.q1[i0] + fq * self.q1[i1]
         p = (1 - frac) * self.p1[i0] + frac * self.p1[i1]
         return q, p
 
@@ -201,7 +231,8 @@ class LoadCycle:
         Parameters
         ----------
         cq, cp : array_like, shape (N,) or scalars
-            Per-node weights of the tangential and normal periodic parts.
+            Per-node weights of the tangential and normal periodic parts.  In 3-D ``cq`` has
+            shape (N, 2) (or (2,)): a direction per node, the value is ``cq_j . q1_j(t)``.
 
         Returns
         -------
@@ -212,14 +243,20 @@ class LoadCycle:
             A time (cycles, in ``[0, 1)``) where the minimum is reached.
         """
         n = self.n_nodes
-        cq = np.broadcast_to(np.asarray(cq, float), (n,))
+        cq = np.broadcast_to(np.asarray(cq, float), self.q0.shape)
         cp = np.broadcast_to(np.asarray(cp, float), (n,))
+        if self.dim == 3:  # project the tangential arrays on the directions cq: a 2-D problem
+            def dot(a):
+                return (cq * a).sum(axis=-1)
+        else:
+            def dot(a):
+                return cq * a
         if self.kind == "samples":
-            g = cq * self.q1 + cp * self.p1  # (S, N)
+            g = dot(self.q1) + cp * self.p1  # (S, N)
             i = np.argmin(g, axis=0)
             return g[i, np.arange(n)], i / self.n_samples
-        a = cq * self.q_cos + cp * self.p_cos  # (H, N) cosine coefficients
-        b = cq * self.q_sin + cp * self.p_sin
+        a = dot(self.q_cos) + cp * self.p_cos  # (H, N) cosine coefficients
+        b = dot(self.q_sin) + cp * self.p_sin
         return _trig_min(a, b)
 
     def periodic_max(self, cq, cp):
@@ -242,6 +279,10 @@ class LoadCycle:
         breakpoints of both piecewise-linear functions (0 when the sample times are a subset
         of the new ones).
 
+        3-D: ``err_q`` bounds the Euclidean norm of the tangential error, by the root sum of
+        squares of the two components' bounds (for harmonics; exact for samples, where the
+        norm of the piecewise-linear difference is largest at a breakpoint).
+
         Returns
         -------
         err_q, err_p : ndarray, shape (N,)
@@ -250,14 +291,21 @@ class LoadCycle:
         S = check_count("n_samples", n_samples, 2)
         if self.kind == "harmonic":
             loss = 1.0 - np.cos(np.pi * np.arange(1, self.n_harmonics + 1) / S)  # (H,)
-            return (loss @ np.hypot(self.q_cos, self.q_sin),
-                    loss @ np.hypot(self.p_cos, self.p_sin))
+            if self.dim == 3:
+                err = np.tensordot(loss, np.hypot(self.q_cos, self.q_sin), axes=(0, 0))
+                err_q = np.hypot(err[:, 0], err[:, 1])
+            else:
+                err_q = loss @ np.hypot(self.q_cos, self.q_sin)
+            return err_q, loss @ np.hypot(self.p_cos, self.p_sin)
         if S % self.n_samples == 0:
             return np.zeros(self.n_nodes), np.zeros(self.n_nodes)
         t = np.union1d(np.arange(S) / S, self.breakpoints)
         exact = self.periodic(t)
         coarse = self.to_samples(S).periodic(t)
-        return tuple(np.abs(e - c).max(axis=0) for e, c in zip(exact, coarse, strict=True))
+        dq = np.abs(exact[0] - coarse[0])
+        if self.dim == 3:
+            dq = np.linalg.norm(exact[0] - coarse[0], axis=-1)
+        return dq.max(axis=0), np.abs(exact[1] - coarse[1]).max(axis=0)
 
     # ------------------------------------------------------------------ transformations
     def to_samples(self, n_samples: int) -> LoadCycle:
@@ -302,7 +350,8 @@ class LoadCycle:
             f"n_harmonics={self.n_harmonics}" if self.kind == "harmonic"
             else f"n_samples={self.n_samples}"
         )
-        return f"LoadCycle(n_nodes={self.n_nodes}, kind={self.kind!r}, {extra})"
+        dim = ", dim=3" if self.dim == 3 else ""
+        return f"LoadCycle(n_nodes={self.n_nodes}{dim}, kind={self.kind!r}, {extra})"
 
 
 def _trig_min(a: np.ndarray, b: np.ndarray):

@@ -37,8 +37,10 @@ def is_sparse(value) -> bool:
     return sp.issparse(value)
 
 
-def sparse_matrix(name: str, value, n: int | None = None) -> sp.csr_matrix:
-    """``value`` as a square, finite, real CSR matrix (explicit zeros dropped)."""
+def sparse_matrix(name: str, value, n: int | None = None,
+                  shape: tuple | None = None) -> sp.csr_matrix:
+    """``value`` as a finite, real CSR matrix (explicit zeros dropped): square, of shape
+    ``(n, n)`` when ``n`` is given, or of the given ``shape`` (3-D ``B``: (2N, N))."""
     if sp.issparse(value):
         if value.dtype.kind == "c":
             raise InputError(f"{name} must be a real sparse matrix; got complex values")
@@ -46,18 +48,20 @@ def sparse_matrix(name: str, value, n: int | None = None) -> sp.csr_matrix:
     else:
         from .validation import real_array
         arr = real_array(name, value, what="a real 2-D array", copy=False)
-        if arr.ndim == 0 and n is None:
+        if arr.ndim == 0 and n is None and shape is None:
             arr = arr.reshape(1, 1)
         if arr.ndim != 2:
-            raise ShapeError(f"{name} must be a square 2-D array (N, N); got shape {arr.shape}")
+            raise ShapeError(f"{name} must be a 2-D array; got shape {arr.shape}")
         M = sp.csr_matrix(arr)
-    if M.shape[0] != M.shape[1]:
+    if shape is None and M.shape[0] != M.shape[1]:
         raise ShapeError(f"{name} must be a square 2-D array (N, N); got shape {M.shape}")
-    if M.shape[0] == 0:
+    if 0 in M.shape:
         raise ShapeError(
             f"{name} has shape {M.shape}: a system needs at least one contact node (N >= 1)")
-    if n is not None and M.shape != (n, n):
-        raise ShapeError(f"{name} must have shape ({n}, {n}) to match A; got shape {M.shape}")
+    if shape is None and n is not None:
+        shape = (n, n)
+    if shape is not None and M.shape != tuple(shape):
+        raise ShapeError(f"{name} must have shape {tuple(shape)} to match A; got shape {M.shape}")
     if not np.all(np.isfinite(M.data)):
         coo = M.tocoo()
         k = int(np.flatnonzero(~np.isfinite(coo.data))[0])

@@ -8,16 +8,16 @@ each of the ``N`` contact nodes; ``q``, ``p`` the tangential and normal reaction
 
 from __future__ import annotations
 
-import itertools
 from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
-import scipy.linalg as sla
 import scipy.sparse as sp
 
 from . import citations
 from . import sparse as _sparse
+from .critical import CriticalFriction as CriticalFriction
+from .critical import critical_friction_2d
 from .errors import InputError, NotSymmetricError, ShapeError
 from .validation import MAX_CONDITION, check_conditioning, real_array
 
@@ -34,18 +34,27 @@ COUPLING_RTOL = 1e-12
 EXACT_CRITICAL_FRICTION_MAX_NODES = 4
 
 
-def _as_matrix(name: str, value, n: int | None = None) -> np.ndarray:
+def _as_matrix(name: str, value, n: int | None = None, shape: tuple | None = None,
+               dim: int = 2) -> np.ndarray:
+    """``value`` as a finite real 2-D array: square, or of the given ``shape`` (then the
+    message says which shape ``dim`` asks for)."""
     arr = real_array(name, value, what="a real 2-D array", copy=False)  # only read: K is new
     if arr.ndim == 0 and n is None:
         arr = arr.reshape(1, 1)
-    if arr.ndim != 2 or arr.shape[0] != arr.shape[1]:
-        raise ShapeError(f"{name} must be a square 2-D array (N, N); got shape {arr.shape}")
-    if arr.shape[0] == 0:
+    if shape is None and (arr.ndim != 2 or arr.shape[0] != arr.shape[1]):
+        want = "(2N, 2N)" if dim == 3 else "(N, N)"
+        raise ShapeError(f"{name} must be a square 2-D array {want}; got shape {arr.shape}")
+    if arr.ndim == 2 and 0 in arr.shape:
         raise ShapeError(
             f"{name} has shape {arr.shape}: a system needs at least one contact node (N >= 1)"
         )
-    if n is not None and arr.shape != (n, n):
-        raise ShapeError(f"{name} must have shape ({n}, {n}) to match A; got shape {arr.shape}")
+    if shape is None and n is not None:
+        shape = (n, n)
+    if shape is not None and arr.shape != shape:
+        sym = (" = (2N, N)" if name == "B" else " = (N, N)") if dim == 3 else ""
+        raise ShapeError(f"{name} must have shape {shape}{sym} to match A"
+                         f"{' (dim = 3: A is (2N, 2N))' if dim == 3 else ''}; "
+                         f"got shape {arr.shape}")
     if not np.all(np.isfinite(arr)):
         bad = np.argwhere(~np.isfinite(arr))[0]
         raise InputError(
@@ -54,7 +63,7 @@ def _as_matrix(name: str, value, n: int | None = None) -> np.ndarray:
     return arr
 
 
-def _as_friction(value, n: int) -> np.ndarray:
+def _as_friction(value, n: int, dim: int = 2) -> np.ndarray:
     kind = np.asarray(value).dtype.kind if not isinstance(value, (str, bytes)) else "U"
     if kind in "bUS" or ((kind == "O" or isinstance(value, (list, tuple)))
                          and not _all_numbers(value)):
@@ -66,13 +75,18 @@ def _as_friction(value, n: int) -> np.ndarray:
     f = real_array("friction", value, what=f"a number or an array of shape ({n},)")
     if f.ndim == 0:
         f = np.full(n, float(f))
-    if f.shape != (n,):
-        raise ShapeError(f"friction must be a scalar or have shape ({n},); got shape {f.shape}")
+    aniso = dim == 3 and f.shape == (n, 2)
+    if f.shape != (n,) and not aniso:
+        extra = f" or ({n}, 2) (anisotropic f_x, f_y)" if dim == 3 else ""
+        raise ShapeError(f"friction must be a scalar or have shape ({n},){extra}; "
+                         f"got shape {f.shape}")
     if not np.all(np.isfinite(f)):
         raise InputError(f"friction must be finite; got {f[~np.isfinite(f)][0]}")
     if np.any(f < 0):
-        j = int(np.argmax(f < 0))
+        j = int(np.argmax(np.any(f < 0, axis=-1) if aniso else f < 0))
         raise InputError(f"friction must be >= 0; node {j} has friction {f[j]}")
+    if aniso and np.array_equal(f[:, 0], f[:, 1]):
+        f = np.ascontiguousarray(f[:, 0])  # isotropic after all: one coefficient per node
     f.setflags(write=False)
     return f
 
@@ -84,47 +98,12 @@ def _all_numbers(value) -> bool:
                and not isinstance(x, (bool, np.bool_)) for x in flat)
 
 
-@dataclass(frozen=True)
-class CriticalFriction:
-    """Critical friction of the incremental problem (Klarbring's P-matrix criterion).
-
-    Attributes
-    ----------
-    factor : float
-        Critical multiplier ``alpha_c`` of the friction *profile*: the incremental problem has a
-        unique solution for every load increment when the friction is ``alpha * friction`` with
-        ``alpha < alpha_c``.  For a uniform friction this is ``f_c / f``.  ``inf`` when no
-        friction level can make the problem ill-posed (e.g. ``B = 0``).
-    value : float
-        ``alpha_c * max(friction)``: the critical value expressed as a friction coefficient
-        (exact for uniform friction).
-    exact : bool
-        ``True`` when ``factor`` is the exact critical multiplier (single node, uncoupled
-        system, or full enumeration of principal minors); ``False`` when it is only a
-        *sufficient* bound (below it uniqueness is guaranteed; the true value may be larger).
-    upper_bound : float
-        A necessary bound on ``factor`` from the 2 x 2 single-node minors (the true critical
-        factor is at most this).
-    method : str
-        ``"uncoupled"``, ``"enumeration"``, ``"single-node"`` or ``"sufficient-bound"``.
-    well_posed : bool
-        ``factor > 1``: the system's actual friction is below critical.
-    """
-
-    factor: float
-    value: float
-    exact: bool
-    upper_bound: float
-    method: str
-    well_posed: bool
-
-    def __str__(self) -> str:
-        kind = "exact" if self.exact else "sufficient bound"
-        return (
-            f"critical friction factor {self.factor:.6g} ({kind}, {self.method}); "
-            f"necessary upper bound {self.upper_bound:.6g}; "
-            f"{'well-posed' if self.well_posed else 'NOT well-posed'} at the given friction"
-        )
+def _tangential_size(rows: int, dim: int) -> tuple[int, int]:
+    """``(rows of A, N)``: ``A`` is (N, N) in 2-D and (2N, 2N) in 3-D."""
+    if dim == 3 and rows % 2:
+        raise ShapeError(f"A must have shape (2N, 2N) for dim = 3 (two tangential slips per "
+                         f"node, ordered v_1x, v_1y, v_2x, ...); got {rows} rows, an odd number")
+    return rows, (rows // 2 if dim == 3 else rows)
 
 
 @dataclass(frozen=True, eq=False)
@@ -137,10 +116,17 @@ class DiscreteSystem:
         Blocks of the reduced stiffness ``K = [[A, B], [B^T, C]]`` [force / length].
         ``A`` maps slip to tangential reaction, ``C`` gap to normal reaction, ``B`` couples
         gap to tangential reaction (and, transposed, slip to normal reaction).
+        With ``dim = 3`` (MODEL.md s.8): ``A`` has shape (2N, 2N) over the tangential slips
+        ordered node by node ``(v_1x, v_1y, v_2x, v_2y, ...)``, ``B`` (2N, N), ``C`` (N, N).
     friction : float or array_like, shape (N,)
-        Coulomb friction coefficient of each node (dimensionless, ``>= 0``).
+        Coulomb friction coefficient of each node (dimensionless, ``>= 0``).  With
+        ``dim = 3`` also shape (N, 2): anisotropic (elliptic) friction ``(f_x, f_y)`` per node,
+        the cone ``|diag(1/f_x, 1/f_y) q| <= p``.
     symmetry_rtol : float, optional
         Relative tolerance of the symmetry check of ``A`` and ``C``.
+    dim : {2, 3}, optional
+        Dimension of the contact problem: 2 (one tangential slip per node, the default) or 3
+        (two tangential slips per node and circular, or elliptic, friction cones).
 
     Raises
     ------
@@ -153,6 +139,9 @@ class DiscreteSystem:
     >>> s = sd.DiscreteSystem([[2.0]], [[0.5]], [[3.0]], friction=0.4)
     >>> s.n_nodes, s.is_coupled
     (1, True)
+    >>> s3 = sd.DiscreteSystem(np.eye(2), [[0.1], [0.0]], [[2.0]], friction=0.4, dim=3)
+    >>> s3.n_nodes, s3.K.shape
+    (1, (3, 3))
     """
 
     A: np.ndarray
@@ -160,20 +149,26 @@ class DiscreteSystem:
     C: np.ndarray
     friction: np.ndarray
     symmetry_rtol: float = field(default=SYMMETRY_RTOL, repr=False)
+    dim: int = 2
 
     def __post_init__(self):
         rtol = self.symmetry_rtol
         if isinstance(rtol, bool) or not isinstance(rtol, (int, float, np.floating)) \
                 or not 0 <= rtol < 1:
             raise InputError(f"symmetry_rtol must be a number in [0, 1); got {rtol!r}")
+        dim = self.dim
+        if isinstance(dim, (bool, np.bool_)) or dim not in (2, 3):
+            raise InputError(f"dim must be 2 or 3 (the dimension of the contact problem); "
+                             f"got {dim!r}")
+        object.__setattr__(self, "dim", int(dim))
         if any(sp.issparse(M) for M in (self.A, self.B, self.C)):
             self._init_sparse()
             return
-        A = _as_matrix("A", self.A)
-        n = A.shape[0]
-        B = _as_matrix("B", self.B, n)
-        C = _as_matrix("C", self.C, n)
-        f = _as_friction(self.friction, n)
+        A = _as_matrix("A", self.A, dim=dim)
+        nt, n = _tangential_size(A.shape[0], dim)
+        B = _as_matrix("B", self.B, shape=(nt, n), dim=dim)
+        C = _as_matrix("C", self.C, n, dim=dim)
+        f = _as_friction(self.friction, n, dim)
         scale = max(np.abs(A).max(), np.abs(C).max(), np.abs(B).max(), np.finfo(float).tiny)
         for name, M in (("A", A), ("C", C)):
             asym = np.abs(M - M.T).max()
@@ -187,31 +182,34 @@ class DiscreteSystem:
                 )
         # one exactly symmetric K (downstream factorizations see symmetric data); A, B, C are
         # views of its blocks, so the system holds 4 N^2 numbers, not 7 N^2
-        K = np.empty((2 * n, 2 * n))
-        np.add(A, A.T, out=K[:n, :n])
-        np.add(C, C.T, out=K[n:, n:])
-        K[:n, :n] *= 0.5
-        K[n:, n:] *= 0.5
-        K[:n, n:] = B
-        K[n:, :n] = B.T
+        K = np.empty((nt + n, nt + n))
+        np.add(A, A.T, out=K[:nt, :nt])
+        np.add(C, C.T, out=K[nt:, nt:])
+        K[:nt, :nt] *= 0.5
+        K[nt:, nt:] *= 0.5
+        K[:nt, nt:] = B
+        K[nt:, :nt] = B.T
         del A, B, C
         # positive definite and not numerically singular (cond <= MAX_CONDITION)
         check_conditioning("K = [[A, B], [B^T, C]]", K)
         K.setflags(write=False)
         self.__dict__["K"] = K  # the cached_property's value
-        object.__setattr__(self, "A", K[:n, :n])
-        object.__setattr__(self, "B", K[:n, n:])
-        object.__setattr__(self, "C", K[n:, n:])
+        object.__setattr__(self, "A", K[:nt, :nt])
+        object.__setattr__(self, "B", K[:nt, nt:])
+        object.__setattr__(self, "C", K[nt:, nt:])
         object.__setattr__(self, "friction", f)
 
     def _init_sparse(self):
         """Sparse blocks: one symmetric CSR ``K``, checked without densifying
         (:mod:`.sparse`); ``A``, ``B``, ``C`` are CSR copies of its blocks."""
         A = _sparse.sparse_matrix("A", self.A)
-        n = A.shape[0]
-        B = _sparse.sparse_matrix("B", self.B, n)
+        nt, n = _tangential_size(A.shape[0], self.dim)
+        if self.dim == 3:
+            B = _sparse.sparse_matrix("B", self.B, shape=(nt, n))
+        else:
+            B = _sparse.sparse_matrix("B", self.B, n)
         C = _sparse.sparse_matrix("C", self.C, n)
-        f = _as_friction(self.friction, n)
+        f = _as_friction(self.friction, n, self.dim)
         scale = max(_sparse.abs_max(A), _sparse.abs_max(B), _sparse.abs_max(C),
                     np.finfo(float).tiny)
         for name, M in (("A", A), ("C", C)):
@@ -223,9 +221,9 @@ class DiscreteSystem:
         _sparse.check_sparse_conditioning("K = [[A, B], [B^T, C]]", K,
                                           max_condition=MAX_CONDITION)
         self.__dict__["K"] = K  # (no factor kept: a system is pickled to worker processes)
-        object.__setattr__(self, "A", K[:n, :n].tocsr())
-        object.__setattr__(self, "B", K[:n, n:].tocsr())
-        object.__setattr__(self, "C", K[n:, n:].tocsr())
+        object.__setattr__(self, "A", K[:nt, :nt].tocsr())
+        object.__setattr__(self, "B", K[:nt, nt:].tocsr())
+        object.__setattr__(self, "C", K[nt:, nt:].tocsr())
         object.__setattr__(self, "friction", f)
 
     # ------------------------------------------------------------------ properties
@@ -249,7 +247,7 @@ class DiscreteSystem:
         if not self.is_sparse:
             return self
         return DiscreteSystem(self.A.toarray(), self.B.toarray(), self.C.toarray(),
-                              self.friction, symmetry_rtol=self.symmetry_rtol)
+                              self.friction, symmetry_rtol=self.symmetry_rtol, dim=self.dim)
 
     def to_sparse(self) -> DiscreteSystem:
         """The same system with ``K`` as a ``scipy.sparse`` CSR matrix (exact zeros dropped;
@@ -258,12 +256,35 @@ class DiscreteSystem:
             return self
         return DiscreteSystem(sp.csr_matrix(self.A), sp.csr_matrix(self.B),
                               sp.csr_matrix(self.C), self.friction,
-                              symmetry_rtol=self.symmetry_rtol)
+                              symmetry_rtol=self.symmetry_rtol, dim=self.dim)
 
     @property
     def n_nodes(self) -> int:
         """Number of contact nodes ``N``."""
+        return self.C.shape[0]
+
+    @property
+    def n_tangential(self) -> int:
+        """Number of tangential unknowns: ``N`` in 2-D, ``2N`` in 3-D (the rows of ``A``)."""
         return self.A.shape[0]
+
+    @property
+    def is_anisotropic(self) -> bool:
+        """``True`` for elliptic friction cones (``friction`` of shape (N, 2), 3-D only)."""
+        return np.ndim(self.friction) == 2
+
+    @property
+    def friction_xy(self) -> np.ndarray:
+        """Friction coefficients ``(f_x, f_y)`` per node, shape (N, 2) (3-D systems only; both
+        columns equal for isotropic friction)."""
+        if self.dim != 3:
+            raise InputError("friction_xy is defined for dim = 3 systems only; a 2-D system has "
+                             "one friction coefficient per node (system.friction)")
+        f = self.friction
+        out = f if f.ndim == 2 else np.repeat(f[:, None], 2, axis=1)
+        out = np.array(out, float)
+        out.setflags(write=False)
+        return out
 
     @cached_property
     def K(self) -> np.ndarray:
@@ -289,30 +310,54 @@ class DiscreteSystem:
         return float(ev[-1] / ev[0])
 
     def with_friction(self, friction) -> DiscreteSystem:
-        """A copy with another friction (scalar or shape (N,)); the matrices are shared."""
-        return DiscreteSystem(self.A, self.B, self.C, friction, symmetry_rtol=self.symmetry_rtol)
+        """A copy with another friction (scalar or shape (N,); (N, 2) in 3-D); the matrices are
+        shared."""
+        return DiscreteSystem(self.A, self.B, self.C, friction, symmetry_rtol=self.symmetry_rtol,
+                              dim=self.dim)
 
     def subsystem(self, nodes) -> DiscreteSystem:
         """The system restricted to ``nodes`` (the others held welded: ``v = w = 0``)."""
         idx = np.asarray(nodes, dtype=int)
         ix = np.ix_(idx, idx)
+        if self.dim == 3:
+            t = np.stack([2 * idx, 2 * idx + 1], axis=-1).ravel()  # both slips of each node
+            return DiscreteSystem(self.A[np.ix_(t, t)], self.B[np.ix_(t, idx)], self.C[ix],
+                                  self.friction[idx], dim=3)
         return DiscreteSystem(self.A[ix], self.B[ix], self.C[ix], self.friction[idx])
 
     def reactions(self, slip, gap, q_w, p_w):
-        """Reactions ``(q, p)`` for slips and gaps (shape (..., N)) and welded reactions."""
+        """Reactions ``(q, p)`` for slips and gaps and welded reactions.
+
+        2-D: ``slip``, ``gap``, ``q_w``, ``p_w`` of shape (..., N).  3-D: ``slip`` and ``q_w`` of
+        shape (..., N, 2), ``gap`` and ``p_w`` (..., N); ``q`` is returned with shape (..., N, 2).
+        """
         v = np.asarray(slip, float)
         w = np.asarray(gap, float)
         n = self.n_nodes
+        if self.dim == 3:
+            if v.shape[-2:] != (n, 2) or w.shape[-1:] != (n,):
+                raise ShapeError(f"3-D reactions need slip of shape (..., {n}, 2) and gap of "
+                                 f"shape (..., {n}); got {v.shape} and {w.shape}")
+            lead = np.broadcast_shapes(v.shape[:-2], w.shape[:-1])
+            u = np.concatenate([np.broadcast_to(v, lead + (n, 2)).reshape(lead + (2 * n,)),
+                                np.broadcast_to(w, lead + (n,))], axis=-1).reshape(-1, 3 * n)
+            r = (self.K @ u.T).T.reshape(lead + (3 * n,))
+            return (np.asarray(q_w, float) + r[..., :2 * n].reshape(lead + (n, 2)),
+                    np.asarray(p_w, float) + r[..., 2 * n:])
         u = np.concatenate(np.broadcast_arrays(v, w), axis=-1).reshape(-1, 2 * n)
         r = (self.K @ u.T).T.reshape(np.broadcast_shapes(v.shape, w.shape)[:-1] + (2 * n,))
         return np.asarray(q_w, float) + r[..., :n], np.asarray(p_w, float) + r[..., n:]
 
     def __repr__(self) -> str:
         f = self.friction
-        fr = f"{f[0]:g}" if np.all(f == f[0]) else f"[{f.min():g}..{f.max():g}]"
+        if self.is_anisotropic:
+            fr = f"[{f.min():g}..{f.max():g}] (anisotropic)"
+        else:
+            fr = f"{f[0]:g}" if np.all(f == f[0]) else f"[{f.min():g}..{f.max():g}]"
         sparse = f", sparse (nnz={self.nnz})" if self.is_sparse else ""
+        dim = ", dim=3" if self.dim == 3 else ""
         return (
-            f"DiscreteSystem(n_nodes={self.n_nodes}, coupled={self.is_coupled}, "
+            f"DiscreteSystem(n_nodes={self.n_nodes}{dim}, coupled={self.is_coupled}, "
             f"friction={fr}{sparse})"
         )
 
@@ -343,74 +388,13 @@ class DiscreteSystem:
         -------
         CriticalFriction
         """
+        if self.dim == 3:
+            raise NotImplementedError(
+                "critical_friction is not available for dim = 3 systems yet (the 3-D "
+                "counterpart of Klarbring's criterion comes with the 3-D step engine)")
         citations.register("klarbring1990")
         cache = self.__dict__.setdefault("_critical_cache", {})
         key = int(max_exact_nodes)
         if key not in cache:
-            cache[key] = self._critical_friction(key)
+            cache[key] = critical_friction_2d(self, key)
         return cache[key]
-
-    def _critical_friction(self, max_exact_nodes: int):
-        n = self.n_nodes
-        f = self.friction
-        fmax = float(f.max()) if n else 0.0
-        diagB = np.abs(self.B.diagonal())
-        with np.errstate(divide="ignore", invalid="ignore"):
-            node_bounds = np.where((diagB > 0) & (f > 0), self.A.diagonal() / (diagB * f), np.inf)
-        upper = float(node_bounds.min())
-
-        def result(factor, exact, method):
-            return CriticalFriction(
-                factor=float(factor),
-                value=float(factor * fmax) if fmax > 0 else float("inf"),
-                exact=exact,
-                upper_bound=upper,
-                method=method,
-                well_posed=bool(factor > 1.0),
-            )
-
-        if not self.is_coupled or fmax == 0.0:
-            # block-triangular M_S with SPD diagonal blocks: P for every alpha
-            return result(np.inf, True, "uncoupled" if not self.is_coupled else "frictionless")
-        if n == 1:
-            return result(upper, True, "single-node")
-        if n <= max_exact_nodes:
-            if self.is_sparse:
-                return self.to_dense()._critical_friction(max_exact_nodes)
-            return result(self._critical_factor_by_enumeration(), True, "enumeration")
-        if self.is_sparse:
-            # (A - B C^-1 B^T)^-1 is the leading block of K^-1: Lanczos with solves, no dense Schur
-            lmin, lmax = _sparse.critical_eigenvalues(self, f)
-            return result(min(np.sqrt(max(lmin, 0.0) / lmax), upper), False, "sufficient-bound")
-        schur = self.A - self.B @ np.linalg.solve(self.C, self.B.T)
-        lmin = float(np.linalg.eigvalsh(0.5 * (schur + schur.T))[0])
-        lmax = float(np.linalg.eigvalsh(f[:, None] * self.C * f[None, :])[-1])
-        return result(min(np.sqrt(max(lmin, 0.0) / lmax), upper), False, "sufficient-bound")
-
-    def _critical_factor_by_enumeration(self) -> float:
-        n = self.n_nodes
-        A, B, C, F = self.A, self.B, self.C, np.diag(self.friction)
-        best = np.inf
-        zero = np.zeros((n, n))
-        for s in itertools.product((-1.0, 1.0), repeat=n):
-            S = np.diag(s)
-            M0 = np.block([[C, B.T @ S], [S @ B, S @ A @ S]])
-            M1 = np.block([[zero, zero], [F @ C, F @ B.T @ S]])
-            for size in range(1, 2 * n + 1):
-                for J in itertools.combinations(range(2 * n), size):
-                    # the sign of an x-node that is not in J is irrelevant: count each once
-                    x_nodes = [j - n for j in J if j >= n]
-                    if any(s[k] < 0 for k in range(n) if k not in x_nodes):
-                        continue
-                    M1J = M1[np.ix_(J, J)]
-                    if not np.any(M1J):
-                        continue
-                    # det(M0 + a M1) = 0  <=>  M1 x = mu (-M0) x with a = 1 / mu
-                    ev = sla.eigvals(M1J, -M0[np.ix_(J, J)])
-                    with np.errstate(divide="ignore", invalid="ignore"):
-                        alphas = 1.0 / ev
-                    real = np.abs(alphas.imag) <= 1e-9 * np.maximum(1.0, np.abs(alphas.real))
-                    cand = alphas.real[real & np.isfinite(alphas.real) & (alphas.real > 0)]
-                    if cand.size:
-                        best = min(best, float(cand.min()))
-        return best

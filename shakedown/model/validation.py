@@ -8,11 +8,32 @@ from .errors import InputError, ShapeError
 
 
 def check_same_nodes(system, load) -> None:
-    """``load`` must have one entry per node of ``system``."""
+    """``load`` must have one entry per node of ``system``, in the same dimension."""
     if load.n_nodes != system.n_nodes:
         raise ShapeError(
             f"load has {load.n_nodes} nodes but the system has {system.n_nodes}; build the "
             "LoadCycle with arrays of shape (N,)"
+        )
+    check_same_dimension(system, load)
+
+
+def check_same_dimension(system, load) -> None:
+    """A 3-D system needs a 3-D load (``q0`` of shape (N, 2)) and a 2-D system a 2-D one."""
+    sdim, ldim = getattr(system, "dim", 2), getattr(load, "dim", 2)
+    if sdim != ldim:
+        want = "(N, 2) (q_x, q_y per node)" if sdim == 3 else "(N,)"
+        raise ShapeError(
+            f"the system has dim = {sdim} but the load has dim = {ldim}: build the LoadCycle "
+            f"with tangential arrays (q0, q_cos, ...) of shape {want}"
+        )
+
+
+def require_two_dimensional(system, what: str) -> None:
+    """Refuse a 3-D system in an analysis that has no 3-D counterpart (yet)."""
+    if getattr(system, "dim", 2) != 2:
+        raise InputError(
+            f"{what} is not available for dim = 3 systems (two tangential slips per node); "
+            "it works on 2-D systems (dim = 2)"
         )
 
 

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model.errors import InputError, ShapeError
-from ..model.validation import check_count, real_array
+from ..model.validation import check_count, real_array, require_two_dimensional
 
 FREE, STICK, SLIP, FRICTIONLESS = "free", "stick", "slip", "frictionless"
 STATES = (FREE, STICK, SLIP, FRICTIONLESS)
@@ -270,5 +270,6 @@ def classify_state(system, slip, gap, q_w, p_w, **kwargs) -> NodePartition:
     """Classify a state ``(v, w)`` of a :class:`~shakedown.DiscreteSystem` under welded
     reactions ``(q_w, p_w)`` (reactions from MODEL.md s.1).  Keywords as :func:`classify_nodes`.
     """
+    require_two_dimensional(system, "classify_state")
     q, p = system.reactions(slip, gap, q_w, p_w)
     return classify_nodes(gap, q, p, system.friction, **kwargs)

@@ -29,7 +29,12 @@ import scipy.linalg as sla
 
 from ..model.errors import InputError, ShapeError
 from ..model.system import SYMMETRY_RTOL
-from ..model.validation import check_node_vector, check_stiffness, real_array
+from ..model.validation import (
+    check_node_vector,
+    check_stiffness,
+    real_array,
+    require_two_dimensional,
+)
 from .classify import FREE, FRICTIONLESS, SLIP, NodePartition
 
 
@@ -122,6 +127,7 @@ def as_dynamic_stiffness(source, mass=None):
         return source.dynamic_stiffness
     if callable(source) and not isinstance(source, np.ndarray):
         return source
+    require_two_dimensional(source, "the stability eigen-check (MCEIP)")
     K = source.K if hasattr(source, "K") else source
     if hasattr(K, "toarray"):  # the eigenproblems are dense: a sparse or uncondensed K
         K = K.toarray()  # (2N x 2N) is densified here
