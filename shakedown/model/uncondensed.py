@@ -89,7 +89,7 @@ class UncondensedSystem(DiscreteSystem):
         set_(self, "A", SchurBlock(K, 0, 0))
         set_(self, "B", SchurBlock(K, 0, 1))
         set_(self, "C", SchurBlock(K, 1, 1))
-        set_(self, "friction", _as_friction(friction, K.n))
+        set_(self, "friction", _as_friction(friction, K.n, K.dim))
 
     @property
     def is_sparse(self) -> bool:

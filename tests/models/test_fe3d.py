@@ -222,3 +222,33 @@ def test_unit_rescaling(log_e, log_l):
                                atol=1e-12 * np.abs(ref.K).max())
     np.testing.assert_allclose(big.welded["t"][1] / (sE * sL**2), ref.welded["t"][1], rtol=1e-10,
                                atol=1e-12)
+
+
+def test_system_and_load_cycle_are_three_dimensional(layers):
+    """``cm.system`` is a ``dim = 3`` DiscreteSystem over the same K (dense or uncondensed);
+    ``load_cycle`` gives ``q0`` of shape (N, 2), harmonics or samples."""
+    _, cm, um = layers
+    N = cm.n_nodes
+    s = cm.system
+    assert s.dim == 3 and s.n_nodes == N and s.n_tangential == 2 * N
+    np.testing.assert_array_equal(s.K, cm.K)
+    su = um.system
+    assert su.dim == 3 and su.n_nodes == N and su.n_tangential == 2 * N
+    np.testing.assert_allclose(su.to_dense().K, cm.K, rtol=0, atol=1e-12 * np.abs(cm.K).max())
+    sub = su.subsystem([0, 2])
+    assert sub.dim == 3
+    keep = np.r_[0, 1, 4, 5, 2 * N, 2 * N + 2]
+    np.testing.assert_allclose(sub.K, cm.K[np.ix_(keep, keep)], rtol=0,
+                               atol=1e-12 * np.abs(cm.K).max())
+    assert su.with_friction(0.2).friction_xy.shape == (N, 2)
+    assert su.is_coupled == s.is_coupled
+    q, p = cm.welded["push"]
+    lc = cm.load_cycle(static={"push": 2.0}, cyclic="push")
+    assert lc.dim == 3 and lc.q0.shape == (N, 2)
+    np.testing.assert_allclose(lc.q0, 2 * q)
+    qt, pt = lc.evaluate(np.array([0.0, 0.5]), 1.0)
+    np.testing.assert_allclose(qt[0], 3 * q, atol=1e-15)
+    np.testing.assert_allclose(pt[1], p, atol=1e-15)
+    ls = cm.load_cycle(samples=["push", {"push": -1.0}])
+    assert ls.dim == 3 and ls.q1.shape == (2, N, 2)
+    assert um.load_cycle(static="push").dim == 3
