@@ -302,12 +302,19 @@ def from_file(path, element: str | None = None, boundaries: dict | None = None) 
 
     if not Path(path).is_file():
         raise InputError(f"mesh file {str(path)!r} does not exist")
+    import logging
+
+    quiet = logging.getLogger("skfem.io.meshio")  # hexahedral facets are oriented below
+    level = quiet.level
+    quiet.setLevel(logging.ERROR)
     try:
         mesh = Mesh.load(str(path))
     except Exception as exc:  # meshio raises many types
         # the reader's message may quote the file: name only the error's type
         raise InputError(f"could not read mesh file {str(path)!r} ({type(exc).__name__}); "
                          "give a mesh format meshio reads (gmsh .msh, .vtk, .xdmf)") from None
+    finally:
+        quiet.setLevel(level)
     name = type(mesh).__name__
     if name not in ("MeshTri1", "MeshQuad1", "MeshTet1", "MeshHex1"):
         raise InputError(
