@@ -198,6 +198,11 @@ class _Tail:
 def _table(records):
     import pandas as pd
 
+    if records and records[0].v.ndim == 3:  # a 3-D run: (points, N, 2) slips
+        from .cone_cycles import table_3d
+
+        return table_3d(records)
+
     frames = []
     for i, rec in enumerate(records):
         sl = slice(0, None) if i == 0 else slice(1, None)  # the orbit's points, no repeats

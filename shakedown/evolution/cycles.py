@@ -127,6 +127,12 @@ def solve_cycles(system: DiscreteSystem, load: LoadCycle, lam: float, initial_sl
     -------
     CycleRun, or list of CycleRun for a 2-D ``initial_slip``
 
+    Notes
+    -----
+    A ``dim = 3`` system runs :func:`~.cone_cycles.solve_cycles_3d` (implicit steps of the cone
+    law, :mod:`.cone_step`): slips of shape (N, 2), ``initial_slip`` (N, 2) or
+    (n_states, N, 2), ``method="implicit"`` only.
+
     Examples
     --------
     >>> import shakedown as sd
@@ -136,6 +142,12 @@ def solve_cycles(system: DiscreteSystem, load: LoadCycle, lam: float, initial_sl
     >>> run.period, round(run.steady_dissipation, 12)   # 4 f P (lam Q1 - f P) / k
     (1, 1.0)
     """
+    if getattr(system, "dim", 2) == 3:  # the cone step and its driver (MODEL.md s.8)
+        from .cone_cycles import solve_cycles_3d
+
+        return solve_cycles_3d(system, load, lam, initial_slip, initial_gap, method,
+                               steps_per_cycle, max_cycles, tol, progress=progress,
+                               record_history=record_history, solver=solver, feas_tol=feas_tol)
     lam, V0, W0, n_steps, max_cycles, tol, batch = _check_inputs(
         system, load, lam, initial_slip, initial_gap, method, steps_per_cycle, max_cycles, tol)
     if solver is None:

@@ -1,0 +1,343 @@
+"""The cyclic driver for ``dim = 3`` systems: implicit steps of the cone law (MODEL.md s.8).
+
+:func:`solve_cycles_3d` is what :func:`shakedown.solve_cycles` runs for a 3-D system: the same
+period loop, steady-state test (period 1 and 2), dissipation per period, energy identity,
+permanently stuck nodes and :class:`~.cycle_results.CycleRun` result as in 2-D, with the step of
+:class:`~.cone_step.ConeStepSolver`.  Slips and tangential reactions have shape (..., N, 2).
+
+Scales (as in 2-D, with Euclidean norms per node): ``F`` is the largest welded reaction
+component over the run's time grid; the state change between two states is
+``max_i (k_i |dv_i| + C_ii |dw_i|) / F`` with ``k_i`` the node's tangential stiffness (the
+mean of its two diagonal entries of ``A``).  A node *slips* in the steady orbit when its slip
+path in contact, ``sum |dv_i|`` over the orbit's steps, exceeds ``SHAKEDOWN_FACTOR * tol *
+F / k_i``.
+
+Warm start: step ``j`` of period ``c >= 2`` starts the Newton method from the increment and gaps
+of step ``j`` of period ``c - 1`` (the orbit being approached repeats them), period 1 from the
+previous step's.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+
+import numpy as np
+
+from ..model.errors import InputError, ShapeError
+from ..model.threads import single_blas_thread
+from ..model.validation import check_count, check_load_factor, check_same_nodes
+from .cone_step import STATE_NAMES_3D, ConeStepSolver
+from .cycle_results import SHAKEDOWN_FACTOR, CycleRun, _energy
+from .events import CycleRecord
+from .step_types import SEPARATED
+
+
+class _FlatLoad:
+    """The load with tangential arrays flattened to (..., 2N) (system order), for
+    :func:`~.cycle_results._energy`."""
+
+    def __init__(self, load):
+        self.load = load
+
+    def evaluate(self, t, lam):
+        q, p = self.load.evaluate(t, lam)
+        return q.reshape(q.shape[:-2] + (-1,)), p
+
+
+def _states_in(name, value, n, k=None):
+    x = np.array(value, dtype=float)
+    if x.ndim == 2 and x.shape == (n, 2):
+        x = x[None]
+    if x.ndim != 3 or x.shape[1:] != (n, 2):
+        raise ShapeError(f"{name} of a 3-D system must have shape ({n}, 2) or (n_states, {n}, 2);"
+                         f" got {x.shape}")
+    if not np.all(np.isfinite(x)):
+        raise InputError(f"{name} must be finite")
+    return x
+
+
+def _check(system, load, lam, initial_slip, initial_gap, method, steps, max_cycles, tol):
+    n = system.n_nodes
+    check_same_nodes(system, load)
+    if getattr(load, "dim", 3) != 3:
+        raise ShapeError(f"a 3-D system needs a 3-D load (q0 of shape ({n}, 2)); got a 2-D load")
+    lam = check_load_factor(lam, load)
+    if method != "implicit":
+        raise InputError(f"method={method!r} is not available for dim = 3 (the exact event path "
+                         "of a cone law is not piecewise affine); use method='implicit'")
+    steps = check_count("steps_per_cycle", steps, 2)
+    max_cycles = check_count("max_cycles", max_cycles, 1)
+    tol = float(tol)
+    if not (np.isfinite(tol) and tol > 0):
+        raise InputError(f"tol must be a positive number (e.g. 1e-10); got {tol}")
+    batch = initial_slip is not None and np.ndim(initial_slip) == 3
+    V0 = np.zeros((1, n, 2)) if initial_slip is None else _states_in("initial_slip",
+                                                                     initial_slip, n)
+    k = V0.shape[0]
+    if initial_gap is None:
+        W0 = np.zeros((k, n))
+    else:
+        g = np.array(initial_gap, dtype=float)
+        if g.shape == (n,):
+            g = np.repeat(g[None], k, axis=0)
+        if g.shape != (k, n) or not np.all(np.isfinite(g)) or np.any(g < 0):
+            raise InputError(f"initial_gap must be finite, >= 0, of shape ({n},) or ({k}, {n}); "
+                             f"got shape {np.shape(initial_gap)}")
+        W0 = g
+    return lam, V0, W0, steps, max_cycles, tol, batch
+
+
+def solve_cycles_3d(system, load, lam, initial_slip=None, initial_gap=None,
+                    method="implicit", steps_per_cycle=200, max_cycles=200, tol=1e-10, *,
+                    progress=None, record_history=False, solver=None, feas_tol=None):
+    """:func:`shakedown.solve_cycles` for a ``dim = 3`` system (same parameters and result).
+
+    ``initial_slip`` has shape (N, 2) or (n_states, N, 2) (a list of runs then); ``method`` must
+    be ``"implicit"``; ``solver`` a :class:`~.cone_step.ConeStepSolver` of the same system.
+    In the result, ``final_slip`` is (N, 2), ``cycle_start_slips`` (n_cycles + 1, N, 2), the
+    steady table has columns ``slip_x, slip_y, q_x, q_y`` instead of ``slip, q``, states are
+    ``stick / slip / separation``; ``final_active_sets`` holds the last period's Newton
+    pieces (steps, N).
+    """
+    lam, V0, W0, n_steps, max_cycles, tol, batch = _check(
+        system, load, lam, initial_slip, initial_gap, method, steps_per_cycle, max_cycles, tol)
+    if solver is None:
+        solver = ConeStepSolver(system) if feas_tol is None else ConeStepSolver(
+            system, feas_tol=feas_tol)
+    elif getattr(solver, "system", None) is not system:
+        raise InputError("solver was built for another system; pass solver=None")
+    with single_blas_thread():
+        runs = [_run(system, solver, load, lam, v0, w0, n_steps, max_cycles, tol, progress,
+                     record_history) for v0, w0 in zip(V0, W0, strict=True)]
+    return runs if batch else runs[0]
+
+
+def _change(d, F, v1, w1, v0, w0):
+    dv = np.hypot(*(v1 - v0).T)
+    return float(np.max(d.kT * dv + d.kN * np.abs(w1 - w0), initial=0.0) / F)
+
+
+def _period(solver, c, v, w, qg, pg, U_prev):
+    """One period of implicit steps from ``(v, w)``; a CycleRecord (3-D shapes) and the
+    increments ``U`` (steps, N, 3) for the next period's warm start."""
+    n_steps, n = pg.shape
+    V = np.empty((n_steps + 1, n, 2))
+    Q = np.empty_like(V)
+    Wg, P = np.empty((n_steps + 1, n)), np.empty((n_steps + 1, n))
+    st = np.empty((n_steps + 1, n), np.int8)
+    act = np.empty((n_steps, n), np.int8)
+    U = np.empty((n_steps, n, 3))
+    R = np.empty((n_steps, n, 3))
+    RB = np.empty((n_steps, n, 3))
+    scales = np.empty(n_steps)
+    V[0], Wg[0] = v, w
+    st[0] = np.where(w * solver.data.kN > 0, SEPARATED, 0)
+    r0 = solver.base(v, qg[-1], pg[-1])  # the load at t = 0 (= t = 1 of the grid)
+    r0 += (solver.data.Kn[:, 2::3] @ w).reshape(n, 3)
+    Q[0], P[0] = r0[:, :2], r0[:, 2]
+    guess = None if U_prev is None else U_prev[-1]
+    Wd = 0.0
+    worst = 0.0
+    statuses: dict[str, int] = {}
+    for j in range(n_steps):
+        rb = solver.base(V[j], qg[j], pg[j])
+        g = U_prev[j] if U_prev is not None else guess
+        u, r, s, name, it, res, F = solver.solve_raw(rb, g, equilibrium=False)
+        ok = res.worst <= solver.feas_tol
+        key = ("unique" if solver.well_posed else "solved") if ok else "failed"
+        statuses[key] = statuses.get(key, 0) + 1
+        worst = max(worst, res.worst)
+        V[j + 1] = V[j] + u[:, :2]
+        Wg[j + 1], Q[j + 1], P[j + 1] = u[:, 2], r[:, :2], r[:, 2]
+        st[j + 1] = solver.kinematic_states(u, F)
+        act[j], U[j], R[j], RB[j], scales[j] = s, u, r, rb, F
+        Wd -= float(np.sum(r[:, :2] * u[:, :2]))
+        guess = u
+        if not ok:
+            t = c - 1 + (j + 1) / n_steps
+            rec = CycleRecord(np.zeros(0), V[:j + 2], Wg[:j + 2], Q[:j + 2], P[:j + 2],
+                              st[:j + 2], Wd, ok=False, max_residual=worst, statuses=statuses,
+                              message=f"step {j + 1} of period {c} (t = {t:.6g}): failed: "
+                                      f"no verified solution (residual {res.worst:.3g})")
+            return rec, U
+    # equilibrium of every step of the period by one product with K (node order)
+    Kn = solver.data.Kn
+    eq = np.abs(RB.reshape(n_steps, -1) + U.reshape(n_steps, -1) @ Kn - R.reshape(n_steps, -1))
+    eq = eq.max(axis=1) / scales
+    worst = max(worst, float(eq.max()))
+    msg = ""
+    if eq.max() > 10 * solver.feas_tol:
+        k = int(np.argmax(eq))
+        msg = (f"step {k + 1} of period {c}: equilibrium residual {eq[k]:.3g} > "
+               f"{10 * solver.feas_tol:g} (recomputed with K)")
+    t = c - 1 + np.arange(n_steps + 1) / n_steps
+    rec = CycleRecord(t, V, Wg, Q, P, st, Wd, active_sets=act, n_steps=n_steps,
+                      max_residual=worst, ok=not msg, message=msg, statuses=statuses)
+    return rec, U
+
+
+def _run(system, solver, load, lam, v0, w0, n_steps, max_cycles, tol, progress, record_history):
+    t_start = time.perf_counter()
+    tot0 = dict(solver.totals)
+    d = solver.data
+    grid = np.arange(1, n_steps + 1) / n_steps
+    qg, pg = load.evaluate(grid, lam)
+    F = float(max(np.abs(qg).max(), np.abs(pg).max()))
+    F = F if F > 0 else 1.0
+    v, w = v0.copy(), w0.copy()
+    starts_v, starts_w = [v.copy()], [w.copy()]
+    W_list, change, records, history = [], [], [], [] if record_history else None
+    statuses: dict[str, int] = {}
+    max_res, period, ok, fail_msg, U_prev = 0.0, 0, True, "", None
+    for c in range(1, max_cycles + 1):
+        rec, U = _period(solver, c, v, w, qg, pg, U_prev)
+        for k_, m_ in (rec.statuses or {}).items():
+            statuses[k_] = statuses.get(k_, 0) + m_
+        max_res = max(max_res, rec.max_residual)
+        if not rec.ok:
+            ok, fail_msg = False, rec.message
+            break
+        U_prev = U
+        records = (records + [rec])[-2:]
+        if history is not None:
+            history.append(rec)
+        v, w = rec.v[-1].copy(), rec.w[-1].copy()
+        W_list.append(rec.dissipation)
+        change.append(_change(d, F, v, w, starts_v[-1], starts_w[-1]))
+        starts_v.append(v.copy())
+        starts_w.append(w.copy())
+        if progress is not None:
+            progress(c, max_cycles, rec.dissipation)
+        if change[-1] <= tol:
+            period = 1
+        elif c >= 2 and _change(d, F, v, w, starts_v[-3], starts_w[-3]) <= tol:
+            period = 2
+        if period:
+            break
+    return _finish_3d(system, solver, load, lam, n_steps, tol, F, records, history, period,
+                      W_list, change, starts_v, starts_w, v, w, ok, fail_msg, statuses, max_res,
+                      tot0, t_start, max_cycles)
+
+
+def _finish_3d(system, solver, load, lam, n_steps, tol, F, records, history, period, W_list,
+               change, starts_v, starts_w, v, w, ok, fail_msg, statuses, max_res, tot0,
+               t_start, max_cycles):
+    d = solver.data
+    n_cycles = len(W_list)
+    orbit = records[-period:] if period else records[-1:]
+    if period:
+        states = np.concatenate([r.states[1:] for r in orbit])
+        V = np.concatenate([orbit[0].v] + [r.v[1:] for r in orbit[1:]])
+        contact = states != SEPARATED
+        travel = np.sum(np.hypot(*np.diff(V, axis=0).transpose(2, 0, 1)) * contact, axis=0)
+        slipped = travel * d.kT / F > SHAKEDOWN_FACTOR * tol
+        stuck = np.flatnonzero(~slipped & np.all(contact, axis=0))
+        steady_W = float(np.mean([r.dissipation for r in orbit]))
+        shook = not bool(np.any(slipped))
+        flat = [_flat(r) for r in orbit]
+        K = np.asarray(system.to_dense().K if getattr(system, "is_sparse", False) else system.K)
+        diag = np.concatenate([np.repeat(d.kT, 2), d.kN])
+        energy = _energy(flat, _FlatLoad(load), lam, diag, F, tol, K=K, implicit=True)
+        status = "periodic"
+        msg = (f"periodic with period {period} T after {n_cycles} period(s); "
+               + ("shook down" if shook else f"steady W = {steady_W:.6g} per period"))
+    else:
+        stuck, steady_W, shook, energy = np.zeros(0, int), float("nan"), False, None
+        if ok:
+            status = "not_converged"
+            msg = (f"no steady orbit within {max_cycles} period(s); last state change "
+                   f"{change[-1]:.3g} > tol = {tol:g}" if change else "no period simulated")
+        else:
+            status, msg = "step_failed", f"stopped: {fail_msg}"
+    bad = {k: m for k, m in statuses.items() if k != "unique"}
+    if bad:
+        msg += "; step statuses " + ", ".join(f"{k}: {m}" for k, m in sorted(bad.items()))
+    tot = {k: solver.totals[k] - tot0.get(k, 0) for k in solver.totals}
+    stats = dict(n_steps=tot["steps"], n_events=0, rate_solves=0,
+                 active_set_iterations=tot["iterations"], factorizations=tot["iterations"],
+                 low_rank_updates=0, cache_hits=0, lemke_calls=0, enumerations=0,
+                 newton_iterations=tot["iterations"], cold_restarts=tot["cold_restarts"],
+                 gauss_seidel=tot["gauss_seidel"], wall_time=time.perf_counter() - t_start)
+    run = CycleRun(
+        dissipation=np.asarray(W_list, float), steady_dissipation=steady_W,
+        shook_down=bool(shook), period=int(period), stuck_nodes=np.asarray(stuck, int),
+        n_cycles=n_cycles, cycles_to_steady=n_cycles - period if period else -1,
+        state_change=np.asarray(change, float), final_slip=np.asarray(v, float).copy(),
+        final_gap=np.asarray(w, float).copy(), cycle_start_slips=np.asarray(starts_v),
+        cycle_start_gaps=np.asarray(starts_w), steady_orbit=tuple(orbit),
+        energy_identity=energy, status=status, message=msg, max_residual=float(max_res),
+        step_statuses=dict(statuses), statistics=stats, method="implicit",
+        steps_per_cycle=n_steps, lam=lam, tol=tol, force_scale=F, load=load,
+        final_active_sets=records[-1].active_sets if records else None,
+        history=table_3d(history) if history else None)
+    return _trust_3d(run, system, load, orbit, solver)
+
+
+def _flat(rec):
+    """A record with the tangential arrays flattened to (points, 2N) (system order)."""
+    k = rec.v.shape[0]
+    return replace(rec, v=rec.v.reshape(k, -1), q=rec.q.reshape(k, -1))
+
+
+def _trust_3d(run, system, load, orbit, solver):
+    """Overflow as a failure; a shakedown whose smallest cone margin over the orbit is below what
+    the load's sampling can hide flagged (``within_sampling_error``), as in 2-D."""
+    from .sampling import non_finite_message
+
+    numbers = (run.dissipation, run.final_slip, run.final_gap, [run.force_scale])
+    if not all(np.all(np.isfinite(x)) for x in numbers) or (
+            run.period and not np.isfinite(run.steady_dissipation)):
+        return replace(run, status="non_finite", shook_down=False,
+                       message=non_finite_message(run.force_scale, system) + "; " + run.message)
+    err_q, err_p = load.sampling_error(run.steps_per_cycle)
+    error = float(run.lam * max(err_q.max(initial=0.0), err_p.max(initial=0.0)))
+    if not run.shook_down or error <= solver.feas_tol * run.force_scale or not orbit:
+        return replace(run, sampling_error=error)
+    d = solver.data
+    S = np.column_stack([d.sx, d.sy])
+    Q = np.concatenate([r.q for r in orbit])
+    P = np.concatenate([r.p for r in orbit])
+    contact = np.concatenate([r.w for r in orbit]) == 0
+    margin = np.where(contact, (d.g * P - np.hypot(*(Q / S).transpose(2, 0, 1)))
+                      * S.min(axis=1), np.inf).min(axis=0)
+    fmax = system.friction_xy.max(axis=1)
+    budget = run.lam * (1.0 + fmax) * np.maximum(err_q, err_p)
+    short = np.flatnonzero(margin < budget)
+    if short.size == 0:
+        return replace(run, sampling_error=error)
+    j = int(short[np.argmin(margin[short] - budget[short])])
+    msg = (f"shook down on the load sampled at {run.steps_per_cycle} points per period, but node "
+           f"{j + 1} keeps a cone margin of only {margin[j]:.3g}, below what the sampling can "
+           f"hide ({budget[j]:.3g}): the verdict lies within the load's sampling error "
+           f"({error:.3g}); rerun with more steps_per_cycle")
+    return replace(run, sampling_error=error, within_sampling_error=True,
+                   message=run.message + "; " + msg)
+
+
+def table_3d(records):
+    """The time series of 3-D records, one row per (time, node): ``cycle``, ``t``, ``node``,
+    ``slip_x``, ``slip_y``, ``gap``, ``q_x``, ``q_y``, ``p``, ``state``
+    (:data:`~.cone_step.STATE_NAMES_3D`)."""
+    import pandas as pd
+
+    frames = []
+    for i, rec in enumerate(records):
+        sl = slice(0, None) if i == 0 else slice(1, None)
+        t = rec.t[sl]
+        K, n = rec.w[sl].shape
+        frames.append(pd.DataFrame({
+            "cycle": np.full(K * n, int(round(rec.t[-1])) if rec.t.size else 0),
+            "t": np.repeat(t, n), "node": np.tile(np.arange(n), K),
+            "slip_x": rec.v[sl][..., 0].ravel(), "slip_y": rec.v[sl][..., 1].ravel(),
+            "gap": rec.w[sl].ravel(),
+            "q_x": rec.q[sl][..., 0].ravel(), "q_y": rec.q[sl][..., 1].ravel(),
+            "p": rec.p[sl].ravel(),
+            "state": pd.Categorical.from_codes(rec.states[sl].ravel().astype(int),
+                                               categories=list(STATE_NAMES_3D)),
+        }))
+    cols = ["cycle", "t", "node", "slip_x", "slip_y", "gap", "q_x", "q_y", "p", "state"]
+    return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=cols)
+
+
+__all__ = ["solve_cycles_3d", "table_3d"]

@@ -1,0 +1,390 @@
+"""Compiled semismooth Newton method of the 3-D implicit step (MODEL.md s.8.4).
+
+The step at ``t_{k+1}`` from slips ``v_k``: unknowns ``u_i = (dv_ix, dv_iy, w_i)`` per node,
+reactions ``r_i = (q_ix, q_iy, p_i)``, ``r = r_b + K_n u`` with ``K_n`` the stiffness in node
+order (``3i, 3i + 1``: tangential ``x, y``; ``3i + 2``: normal) and ``r_b = (q_w + A v_k,
+p_w + B^T v_k)``.  Per node the Coulomb law with the (elliptic) cone
+``|F_i^-1 q_i| <= g_i p_i``, ``F_i = diag(s_ix, s_iy)`` (``s = f`` and ``g = 1`` for a
+frictional node; ``s = 1``, ``g = 0`` for a frictionless one).
+
+Formulation (Alart & Curnier 1991, in the scaled variables ``q~ = F^-1 q``, ``v~ = F dv`` in
+which the cone is circular and the maximal-dissipation law reads ``q~ = -R v~ / |v~|``)::
+
+    p  = max(0, p - rho_N w) =: R                      (normal)
+    q~ = proj_{disk(g R)}(t),  t = q~ - rho_T v~       (tangential)
+
+``rho_T = k_T / s^2``, ``rho_N = C_ii`` (``k_T``: the node's tangential stiffness), so that both
+terms of each argument are forces of the same order.  Each iteration classifies the nodes at
+the current point (``p - rho_N w <= 0``: separated; ``|t| <= g R``: stick; else slip), and takes
+the semismooth Newton step of that piece.  The step is *reduced*: on a stick node it sets
+``dv = 0, w = 0`` (exact, the AC equations are linear there), on a slip node ``w = 0`` and two
+rows ``M q~+ - g n p+ + c rho_T P v~+ = 0`` remain (``n = t / |t|``, ``c = g R / |t|``,
+``P = I - n n^T``, ``M = I - c P``; derived from the linearization, the right-hand side
+vanishes identically), on a separated node ``q+ = 0, p+ = 0``.  The unknowns are the slips of
+the slip and separated nodes and the gaps of the separated nodes: a dense system of that size,
+solved by LU with partial pivoting (LAPACK through numba).  Globalisation: backtracking on the
+merit ``sum |phi|^2`` of the AC residual (in force units) from the Newton point towards the
+current one; the iteration stops when the residual is below ``tol`` of the force scale or stalls.
+
+The caller (:class:`~.cone_step.ConeStepSolver`) verifies every answer by its own conditions,
+independently of this formulation.  Without numba the same functions run as Python (slow).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .kernel_jit import HAVE_KERNEL, njit
+
+STICK, SLIP, SEPARATED = 0, 1, 3
+
+#: Exit codes of :func:`newton`.
+CONVERGED, STALLED, MAX_ITER, SINGULAR = 0, 1, 2, 3
+
+
+@njit(cache=True)
+def _reactions(Kn, rb, u, r):
+    """``r = rb + Kn u`` using only the non-zero entries of ``u`` (stick nodes are zero)."""
+    m = u.size
+    r[:] = rb
+    for k in range(m):
+        uk = u[k]
+        if uk != 0.0:
+            for j in range(m):
+                r[j] += Kn[k, j] * uk  # K symmetric: row access
+
+
+@njit(cache=True)
+def _classify(r, u, sx, sy, g, rhoT, rhoN, states, phi, nhat, cfac):
+    """States at the point ``(u, r)``, the AC residual ``phi`` (force units, (3N,)) and, per slip
+    node, ``n = t / |t|`` and ``c = g R / |t|``; returns ``sum phi^2``."""
+    n = g.size
+    merit = 0.0
+    for i in range(n):
+        qx, qy, p = r[3 * i], r[3 * i + 1], r[3 * i + 2]
+        vx, vy, w = u[3 * i], u[3 * i + 1], u[3 * i + 2]
+        R = p - rhoN[i] * w
+        if R <= 0.0:
+            states[i] = SEPARATED
+            phi[3 * i] = qx
+            phi[3 * i + 1] = qy
+            phi[3 * i + 2] = p
+        else:
+            phi[3 * i + 2] = rhoN[i] * w  # p - R
+            qtx, qty = qx / sx[i], qy / sy[i]
+            tx = qtx - rhoT[i] * sx[i] * vx
+            ty = qty - rhoT[i] * sy[i] * vy
+            tn = np.sqrt(tx * tx + ty * ty)
+            rad = g[i] * R
+            if tn <= rad:
+                states[i] = STICK
+                phi[3 * i] = sx[i] * (qtx - tx)  # = rho_T s^2 dv: a force
+                phi[3 * i + 1] = sy[i] * (qty - ty)
+            else:
+                states[i] = SLIP
+                nx, ny = tx / tn, ty / tn
+                nhat[2 * i], nhat[2 * i + 1] = nx, ny
+                cfac[i] = rad / tn
+                phi[3 * i] = sx[i] * (qtx - rad * nx)
+                phi[3 * i + 1] = sy[i] * (qty - rad * ny)
+        merit += phi[3 * i] ** 2 + phi[3 * i + 1] ** 2 + phi[3 * i + 2] ** 2
+    return merit
+
+
+@njit(cache=True)
+def _newton_point(Kn, rb, sx, sy, g, rhoT, states, nhat, cfac, unew, dense_max):
+    """The reduced semismooth Newton step of the current piece (see the module docstring):
+    ``unew`` (3N,); returns False when the reduced matrix is singular."""
+    n = g.size
+    idx = np.empty(3 * n, np.int64)  # unknowns (indices into u)
+    m = 0
+    for i in range(n):
+        if states[i] == SLIP:
+            idx[m], idx[m + 1] = 3 * i, 3 * i + 1
+            m += 2
+        elif states[i] == SEPARATED:
+            idx[m], idx[m + 1], idx[m + 2] = 3 * i, 3 * i + 1, 3 * i + 2
+            m += 3
+    unew[:] = 0.0
+    if m == 0:
+        return True
+    J = np.empty((m, m))
+    h = np.empty(m)
+    row = 0
+    for i in range(n):
+        if states[i] == SLIP:
+            nx, ny = nhat[2 * i], nhat[2 * i + 1]
+            c = cfac[i]
+            # M = I - c P, P = I - n n^T; rows: M F^-1 K_q - g n K_p (+ c rho P F on own dv)
+            pxx, pxy, pyy = 1.0 - nx * nx, -nx * ny, 1.0 - ny * ny
+            m11, m12, m22 = 1.0 - c * pxx, -c * pxy, 1.0 - c * pyy
+            a1, a2 = m11 / sx[i], m12 / sy[i]
+            b1, b2 = m12 / sx[i], m22 / sy[i]
+            gx, gy = g[i] * nx, g[i] * ny
+            kx, ky, kp = 3 * i, 3 * i + 1, 3 * i + 2
+            for col in range(m):
+                k = idx[col]
+                J[row, col] = a1 * Kn[kx, k] + a2 * Kn[ky, k] - gx * Kn[kp, k]
+                J[row + 1, col] = b1 * Kn[kx, k] + b2 * Kn[ky, k] - gy * Kn[kp, k]
+            h[row] = -(a1 * rb[kx] + a2 * rb[ky] - gx * rb[kp])
+            h[row + 1] = -(b1 * rb[kx] + b2 * rb[ky] - gy * rb[kp])
+            cr = c * rhoT[i]
+            for col in range(m):  # the own slip columns (located by a scan: m is small)
+                k = idx[col]
+                if k == kx:
+                    J[row, col] += cr * pxx * sx[i]
+                    J[row + 1, col] += cr * pxy * sx[i]
+                elif k == ky:
+                    J[row, col] += cr * pxy * sy[i]
+                    J[row + 1, col] += cr * pyy * sy[i]
+            row += 2
+        elif states[i] == SEPARATED:
+            for a in range(3):
+                ka = 3 * i + a
+                for col in range(m):
+                    J[row, col] = Kn[ka, idx[col]]
+                h[row] = -rb[ka]
+                row += 1
+    # scale rows and columns to unit diagonal magnitude before pivoting (any units)
+    cs = np.empty(m)
+    for col in range(m):
+        cs[col] = 1.0 / np.sqrt(max(abs(Kn[idx[col], idx[col]]), 1e-300))
+    for a in range(m):
+        for col in range(m):
+            J[a, col] *= cs[col]
+    x = _linear_solve(J, h, states, n, dense_max)
+    for col in range(m):
+        v = x[col] * cs[col]
+        if not np.isfinite(v):
+            return False
+        unew[idx[col]] = v
+    return True
+
+
+#: Reduced systems up to this size are solved by LU; larger ones by GMRES first (below).
+DENSE_MAX = 300
+
+
+@njit(cache=True)
+def _linear_solve(J, h, states, n, dense_max):
+    """``J x = h``: LU with partial pivoting for ``m <= DENSE_MAX``, else restarted GMRES
+    preconditioned by the inverses of ``J``'s node blocks (2 x 2 slip, 3 x 3 separated), to a
+    relative residual of 1e-14, with LU when it does not get there in 120 iterations (a
+    ``O(m^2)``-per-iteration path for the large, well-conditioned systems where the LU's
+    ``O(m^3)`` dominates the step)."""
+    m = h.size
+    if m <= dense_max:
+        return np.linalg.solve(J, h)
+    # block-Jacobi preconditioner
+    Pinv = np.zeros((m, 3))
+    starts = np.empty(n + 1, np.int64)
+    nb = 0
+    pos = 0
+    for i in range(n):
+        if states[i] == SLIP or states[i] == SEPARATED:
+            starts[nb] = pos
+            pos += 2 if states[i] == SLIP else 3
+            nb += 1
+    starts[nb] = pos
+    for b in range(nb):
+        a0, a1 = starts[b], starts[b + 1]
+        blk = np.linalg.inv(J[a0:a1, a0:a1].copy())
+        for a in range(a1 - a0):
+            for c in range(a1 - a0):
+                Pinv[a0 + a, c] = blk[a, c]
+    hn = np.sqrt(np.sum(h * h))
+    x = np.zeros(m)
+    if hn == 0.0:
+        return x
+    restart = 40
+    V = np.empty((restart + 1, m))
+    H = np.zeros((restart + 1, restart))
+    cs = np.empty(restart)
+    sn = np.empty(restart)
+    g = np.empty(restart + 1)
+    z = np.empty(m)
+    total = 0
+    while total < 120:
+        rres = h - J @ x
+        beta = np.sqrt(np.sum(rres * rres))
+        if beta <= 1e-14 * hn:
+            return x
+        V[0] = rres / beta
+        g[:] = 0.0
+        g[0] = beta
+        k_used = 0
+        for k in range(restart):
+            total += 1
+            for b in range(nb):  # z = P^-1 V[k]
+                a0, a1 = starts[b], starts[b + 1]
+                for a in range(a1 - a0):
+                    acc = 0.0
+                    for c in range(a1 - a0):
+                        acc += Pinv[a0 + a, c] * V[k, a0 + c]
+                    z[a0 + a] = acc
+            w = J @ z
+            for j in range(k + 1):
+                H[j, k] = np.dot(w, V[j])
+                w -= H[j, k] * V[j]
+            H[k + 1, k] = np.sqrt(np.sum(w * w))
+            if H[k + 1, k] > 0.0:
+                V[k + 1] = w / H[k + 1, k]
+            for j in range(k):
+                t = cs[j] * H[j, k] + sn[j] * H[j + 1, k]
+                H[j + 1, k] = -sn[j] * H[j, k] + cs[j] * H[j + 1, k]
+                H[j, k] = t
+            den = np.hypot(H[k, k], H[k + 1, k])
+            cs[k], sn[k] = H[k, k] / den, H[k + 1, k] / den
+            H[k, k] = den
+            H[k + 1, k] = 0.0
+            g[k + 1] = -sn[k] * g[k]
+            g[k] = cs[k] * g[k]
+            k_used = k + 1
+            if abs(g[k + 1]) <= 1e-15 * hn or H[k, k] == 0.0:
+                break
+        y = np.zeros(k_used)
+        for j in range(k_used - 1, -1, -1):
+            acc = g[j]
+            for c in range(j + 1, k_used):
+                acc -= H[j, c] * y[c]
+            y[j] = acc / H[j, j]
+        upd = np.zeros(m)
+        for j in range(k_used):
+            upd += y[j] * V[j]
+        for b in range(nb):
+            a0, a1 = starts[b], starts[b + 1]
+            for a in range(a1 - a0):
+                acc = 0.0
+                for c in range(a1 - a0):
+                    acc += Pinv[a0 + a, c] * upd[a0 + c]
+                x[a0 + a] += acc
+    rres = h - J @ x
+    if np.sqrt(np.sum(rres * rres)) <= 1e-13 * hn:
+        return x
+    return np.linalg.solve(J, h)
+
+
+@njit(cache=True)
+def newton(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, dense_max=DENSE_MAX):
+    """Semismooth Newton on the Alart-Curnier equations from the guess ``u`` (in place).
+
+    Parameters
+    ----------
+    Kn : ndarray, shape (3N, 3N)
+        Stiffness in node order.
+    rb : ndarray, shape (3N,)
+        Reactions at ``u = 0`` [force].
+    sx, sy, g, rhoT, rhoN : ndarray, shape (N,)
+        Cone scaling, cone factor (0 or 1) and the AC parameters (see module docstring).
+    u : ndarray, shape (3N,)
+        Guess on entry, answer on exit.
+    r : ndarray, shape (3N,)
+        Reactions of the answer (output).
+    states : ndarray of int8, shape (N,)
+        States of the answer's piece (output).
+    tol : float
+        Absolute stopping tolerance on ``max |phi|`` [force].
+    max_iter : int
+    dense_max : int
+        Reduced systems up to this size by LU, larger ones by GMRES first.
+
+    Returns
+    -------
+    code, iterations, residual : int, int, float
+        ``code`` in (CONVERGED, STALLED, MAX_ITER, SINGULAR); ``residual = max |phi|``.
+    """
+    n = g.size
+    phi = np.empty(3 * n)
+    nhat = np.zeros(2 * n)
+    cfac = np.zeros(n)
+    unew = np.empty(3 * n)
+    utry = np.empty(3 * n)
+    rtry = np.empty(3 * n)
+    st_try = np.empty(n, np.int8)
+    phi_try = np.empty(3 * n)
+    nh_try = np.zeros(2 * n)
+    cf_try = np.zeros(n)
+    dr = np.empty(3 * n)
+    zero = np.zeros(3 * n)
+    _reactions(Kn, rb, u, r)
+    merit = _classify(r, u, sx, sy, g, rhoT, rhoN, states, phi, nhat, cfac)
+    it = 0
+    while it < max_iter:
+        if np.max(np.abs(phi)) <= tol:
+            return CONVERGED, it, np.max(np.abs(phi))
+        it += 1
+        if not _newton_point(Kn, rb, sx, sy, g, rhoT, states, nhat, cfac, unew, dense_max):
+            return SINGULAR, it, np.max(np.abs(phi))
+        for k in range(3 * n):  # the Newton direction and its reactions, once
+            unew[k] -= u[k]
+        _reactions(Kn, zero, unew, dr)
+        alpha = 1.0
+        accepted = False
+        for _ls in range(30):
+            for k in range(3 * n):
+                utry[k] = u[k] + alpha * unew[k]
+                rtry[k] = r[k] + alpha * dr[k]
+            mt = _classify(rtry, utry, sx, sy, g, rhoT, rhoN, st_try, phi_try, nh_try, cf_try)
+            if mt <= (1.0 - 1e-4 * alpha) * merit or (alpha == 1.0 and mt <= merit
+                                                     and np.max(np.abs(phi_try)) <= tol):
+                accepted = True
+                break
+            alpha *= 0.5
+        if not accepted:
+            return STALLED, it, np.max(np.abs(phi))
+        u[:] = utry
+        r[:] = rtry
+        states[:] = st_try
+        phi[:] = phi_try
+        nhat[:] = nh_try
+        cfac[:] = cf_try
+        merit = mt
+    if np.max(np.abs(phi)) <= tol:
+        return CONVERGED, it, np.max(np.abs(phi))
+    return MAX_ITER, it, np.max(np.abs(phi))
+
+
+@njit(cache=True)
+def gauss_seidel(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_sweeps, local_iter):
+    """Projected block Gauss-Seidel (the fallback): each node's own 3 x 3 problem solved exactly
+    by :func:`newton` with the other nodes frozen, sweeps until the global AC residual is below
+    ``tol`` [force].  Converges for small enough friction; slow (linear) but independent of the
+    global Newton's globalisation.  Returns (code, sweeps, residual) like :func:`newton`."""
+    n = g.size
+    Kl = np.empty((3, 3))
+    rbl = np.empty(3)
+    ul = np.empty(3)
+    rl = np.empty(3)
+    stl = np.empty(1, np.int8)
+    phi = np.empty(3 * n)
+    nhat = np.zeros(2 * n)
+    cfac = np.zeros(n)
+    _reactions(Kn, rb, u, r)
+    for sweep in range(max_sweeps):
+        for i in range(n):
+            for a in range(3):
+                for b in range(3):
+                    Kl[a, b] = Kn[3 * i + a, 3 * i + b]
+                ul[a] = u[3 * i + a]
+            for a in range(3):  # the reactions without the node's own displacement
+                s = r[3 * i + a]
+                for b in range(3):
+                    s -= Kl[a, b] * ul[b]
+                rbl[a] = s
+            newton(Kl, rbl, sx[i:i + 1], sy[i:i + 1], g[i:i + 1], rhoT[i:i + 1],
+                   rhoN[i:i + 1], ul, rl, stl, 1e-3 * tol, local_iter)
+            for b in range(3):
+                d = ul[b] - u[3 * i + b]
+                if d != 0.0:
+                    for j in range(3 * n):
+                        r[j] += Kn[3 * i + b, j] * d
+                    u[3 * i + b] = ul[b]
+        _classify(r, u, sx, sy, g, rhoT, rhoN, states, phi, nhat, cfac)
+        res = np.max(np.abs(phi))
+        if res <= tol:
+            return CONVERGED, sweep + 1, res
+    return MAX_ITER, max_sweeps, np.max(np.abs(phi))
+
+
+__all__ = ["newton", "gauss_seidel", "STICK", "SLIP", "SEPARATED", "HAVE_KERNEL", "CONVERGED",
+           "STALLED", "MAX_ITER", "SINGULAR"]
