@@ -1,0 +1,112 @@
+"""3-D FE condensation: time and memory against the number of contact nodes, condensed (dense
+``K``) against uncondensed (sparse ``K_z``).
+
+    OPENBLAS_NUM_THREADS=1 python3 benchmarks/bench_fe3d.py --n 4 8 12 16 24 --repeats 3
+
+The body: a block ``1 x 1 x 0.25`` of ``n x n x max(2, n // 4)`` trilinear hexahedra (``Q1``;
+``--element P1`` for tetrahedra, six per cell), E = 1, nu = 0.3, held at its top, its bottom on a
+rigid obstacle: ``N = (n + 1)^2`` contact nodes, ``3 N`` contact unknowns; one load case (top
+displaced by (0.01, 0, -0.01)).  Each measurement is a fresh subprocess (its peak RSS is its
+own; a 2 x 2 x 2 model is built first, untimed, so that imports and first calls are not
+counted): ``condensed`` = ``FEModel.condense()`` (assembly, boundary-layer LU of ``K_ii``, dense
+Schur complement and welded reactions); ``uncondensed`` = ``FEModel.uncondensed()`` (assembly,
+the checks of ``K_z`` (symmetry, one sparse LU, 1-norm condition estimate) and welded reactions)
+and one product ``K @ x`` with a random ``x`` (one solve with ``K_ii``).  ``--check`` also
+compares the two ``K`` (``system.K.toarray()``) in the uncondensed worker (not timed).
+Printed: medians (and worst) of the model time, peak RSS, ``nnz(K_z)`` and the dense ``K`` bytes.
+Results: ``RESULTS_fe3d.md``, ``fe3d.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+
+def model(n: int, element: str):
+    from shakedown import fe
+
+    mesh = fe.box(1.0, 1.0, 0.25, n, n, max(2, n // 4), element=element)
+    return fe.FEModel(mesh, fe.isotropic(1.0, 0.3, plane="3d"), dirichlet=["top"],
+                      contact=["bottom"], loads={"push": fe.Displacement("top", (0.01, 0, -0.01))},
+                      friction=0.3)
+
+
+def worker(n: int, kind: str, element: str, check: bool):
+    warm = model(2, element)  # imports and first assembly (not timed)
+    warm.condense() if kind == "condensed" else warm.uncondensed()
+    m = model(n, element)
+    t0 = time.perf_counter()
+    if kind == "condensed":
+        cm = m.condense()
+        t1 = time.perf_counter()
+        extra = {"dense_K_mb": cm.K.nbytes / 2**20, "nnz_Kz": None, "product_s": None}
+    else:
+        cm = m.uncondensed()
+        t1 = time.perf_counter()
+        x = np.random.default_rng(0).standard_normal(3 * cm.n_nodes)
+        cm.system.K @ x
+        extra = {"dense_K_mb": None, "nnz_Kz": int(cm.system.nnz),
+                 "product_s": time.perf_counter() - t1}
+        if check:
+            dense = m.condense().K
+            extra["max_rel_diff"] = float(np.abs(cm.system.K.toarray() - dense).max()
+                                          / np.abs(dense).max())
+    print(json.dumps({"n": n, "element": element, "kind": kind, "n_nodes": cm.n_nodes,
+                      "dofs": cm.counts["n_full_dofs"], "model_s": t1 - t0,
+                      "timings": cm.timings, **extra,
+                      "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}))
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--n", type=int, nargs="+", default=[4, 8, 12, 16, 24])
+    ap.add_argument("--element", default="Q1")
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--check", action="store_true")
+    ap.add_argument("--json", default="benchmarks/fe3d.json")
+    ap.add_argument("--worker", nargs=2)
+    a = ap.parse_args()
+    if a.worker:
+        worker(int(a.worker[0]), a.worker[1], a.element, a.check)
+        return
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # this checkout's package
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1",
+               PYTHONPATH=root + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    rows = []
+    print(f"uptime: {os.popen('uptime').read().strip()}")
+    for n in a.n:
+        for rep in range(a.repeats):
+            for kind in ("condensed", "uncondensed"):  # side by side, alternating
+                cmd = [sys.executable, __file__, "--worker", str(n), kind, "--element", a.element]
+                if a.check and rep == 0:
+                    cmd.append("--check")
+                out = subprocess.run(cmd, env=env, capture_output=True, text=True, check=True)
+                r = json.loads(out.stdout.strip().splitlines()[-1])
+                r["repeat"] = rep
+                rows.append(r)
+        for kind in ("condensed", "uncondensed"):
+            rs = [r for r in rows if r["n"] == n and r["kind"] == kind]
+            t = [r["model_s"] for r in rs]
+            mem = [r["peak_rss_mb"] for r in rs]
+            print(f"n={n:3d} N={rs[0]['n_nodes']:5d} dofs={rs[0]['dofs']:6d} {kind:12s} "
+                  f"model {np.median(t):7.2f} s (worst {max(t):7.2f}) peak RSS "
+                  f"{np.median(mem):7.0f} MB (worst {max(mem):7.0f})"
+                  + (f" dense K {rs[0]['dense_K_mb']:.1f} MB" if rs[0]["dense_K_mb"] else
+                     f" nnz(K_z) {rs[0]['nnz_Kz']} K@x {np.median([r['product_s'] for r in rs]):.3f} s")
+                  + (f" max|dK|/max|K| {rs[0]['max_rel_diff']:.1e}" if "max_rel_diff" in rs[0]
+                     else ""), flush=True)
+    print(f"uptime: {os.popen('uptime').read().strip()}")
+    with open(a.json, "w") as fh:
+        json.dump(rows, fh, indent=1)
+
+
+if __name__ == "__main__":
+    main()
