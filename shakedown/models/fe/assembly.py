@@ -13,119 +13,18 @@ from functools import cached_property
 import numpy as np
 
 from ...model.errors import InputError
+from .assembly3d import _facet_normals_3d, _voigt_stiffness
+from .loads import (  # noqa: F401 - re-exported: the loads' historical home
+    LOAD_TYPES,
+    BodyForce,
+    Displacement,
+    Pressure,
+    Traction,
+    load_key,
+    normalize_loads,
+)
 from .materials import Material
 from .meshes import FEMesh
-
-# --------------------------------------------------------------------------- loads
-
-
-def _pair(name: str, value) -> tuple[float, ...] | object:
-    """A finite pair ``(x, y)`` (2-D) or triple ``(x, y, z)`` (3-D), or a callable."""
-    if callable(value):
-        return value
-    try:
-        v = np.array(value, dtype=float).reshape(-1)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"{name} must be a pair (x, y) of numbers (a triple (x, y, z) in 3-D); "
-                         f"got {value!r}") from exc
-    if v.shape not in ((2,), (3,)) or not np.all(np.isfinite(v)):
-        raise InputError(f"{name} must be a finite pair (x, y) (a triple (x, y, z) in 3-D); got "
-                         f"{value!r}")
-    return tuple(float(x) for x in v)
-
-
-@dataclass(frozen=True)
-class Traction:
-    """Surface traction on a named boundary [force / length^2 x thickness = force / length in
-    2-D; force / length^2 in 3-D].
-
-    ``value``: ``(t_x, t_y)`` (``(t_x, t_y, t_z)`` in 3-D) in the global frame, or a callable
-    ``f(x) -> (dim, ...)`` of the points ``x`` (shape (dim, ...)); callables make the model
-    uncacheable.
-    """
-
-    boundary: str
-    value: object
-
-    def __post_init__(self):
-        object.__setattr__(self, "value", _pair("Traction.value", self.value))
-
-
-@dataclass(frozen=True)
-class Pressure:
-    """Normal pressure on a named boundary (positive = pushing into the body, along ``-n``)."""
-
-    boundary: str
-    value: float
-
-    def __post_init__(self):
-        if not callable(self.value):
-            v = float(self.value)
-            if not np.isfinite(v):
-                raise InputError(f"Pressure.value must be finite; got {self.value!r}")
-            object.__setattr__(self, "value", v)
-
-
-@dataclass(frozen=True)
-class BodyForce:
-    """Body force per unit volume ``(b_x, b_y[, b_z])`` [force / length^3], or a callable of
-    ``x``."""
-
-    value: object
-    body: int | None = None  # None: every body
-
-    def __post_init__(self):
-        object.__setattr__(self, "value", _pair("BodyForce.value", self.value))
-
-
-@dataclass(frozen=True)
-class Displacement:
-    """Prescribed displacement ``(u_x, u_y[, u_z])`` on a named *Dirichlet* boundary [length]."""
-
-    boundary: str
-    value: object
-
-    def __post_init__(self):
-        object.__setattr__(self, "value", _pair("Displacement.value", self.value))
-
-
-LOAD_TYPES = (Traction, Pressure, BodyForce, Displacement)
-
-
-def normalize_loads(loads) -> dict[str, tuple]:
-    """``None`` | load | list of loads | dict name -> load(s)  ->  dict name -> tuple of loads."""
-    if loads is None:
-        return {}
-    if isinstance(loads, LOAD_TYPES):
-        loads = {"load": [loads]}
-    elif isinstance(loads, (list, tuple)):
-        loads = {"load": list(loads)}
-    if not isinstance(loads, dict):
-        raise InputError(
-            f"loads must be a load, a list of loads or a dict name -> load(s); got {loads!r}"
-        )
-    out = {}
-    for name, case in loads.items():
-        items = [case] if isinstance(case, LOAD_TYPES) else list(case)
-        for it in items:
-            if not isinstance(it, LOAD_TYPES):
-                raise InputError(
-                    f"load case {name!r}: {it!r} is not one of Traction, Pressure, BodyForce, "
-                    "Displacement"
-                )
-        out[str(name)] = tuple(items)
-    return out
-
-
-def load_key(load) -> dict:
-    """JSON-able description of a load; raises if it holds a callable (not cacheable)."""
-    d = {"type": type(load).__name__}
-    for k, v in load.__dict__.items():
-        if callable(v):
-            raise TypeError("callable load")
-        d[k] = v
-    return d
-
 
 # --------------------------------------------------------------------------- bodies
 
@@ -233,6 +132,10 @@ class Body:
                  if self.dim == 2 else
                  {"P1": "ElementTetP1", "P2": "ElementTetP2", "Q1": "ElementHex1"})
         e = getattr(skfem, names[self.mesh.element])()
+        if self.dim == 3 and self.mesh.element == "Q1":
+            # 2 x 2 x 2 Gauss points (exact stiffness and mass of parallelepipeds; the usual full
+            # integration of trilinear hexahedra) instead of scikit-fem's default 4 x 4 x 4
+            return skfem.Basis(self.mesh.mesh, skfem.ElementVector(e), intorder=3)
         return skfem.Basis(self.mesh.mesh, skfem.ElementVector(e))
 
     @cached_property
@@ -424,56 +327,3 @@ class Body:
             "loads": {k: [load_key(x) for x in v] for k, v in sorted(self.loads.items())},
             "thickness": float(self.thickness),
         }
-
-
-#: Memory budget [bytes] of the strain arrays of one block of elements in :func:`_voigt_stiffness`.
-STRAIN_BLOCK_BYTES = 32 * 2**20
-
-
-def _voigt_stiffness(basis, D: np.ndarray, pairs) -> "object":
-    """``K_ij = int eps(phi_i) . D eps(phi_j) dx`` (sparse CSR) over the basis' quadrature.
-
-    The same integrals as scikit-fem's ``asm`` of the form ``eps(u) . D eps(v)``, with the
-    engineering (Voigt) strains of every local basis function computed once per element block
-    instead of once per pair of local functions (a 3-D element has 24-30 local functions:
-    576-900 pairs), then ``K_e = sum_q E^T D E dx`` by ``einsum``.
-    """
-    import scipy.sparse as sp
-
-    nloc = basis.Nbfun
-    grads = np.stack([basis.basis[i][0].grad for i in range(nloc)])  # (nloc, d, d, nel, nqp)
-    dx = basis.dx
-    nel, nqp = dx.shape
-    step = max(1, int(STRAIN_BLOCK_BYTES // (8 * len(pairs) * nloc * nqp)))
-    data = np.empty((nloc, nloc, nel))
-    for s0 in range(0, nel, step):
-        e = slice(s0, min(s0 + step, nel))
-        g = grads[..., e, :]
-        E = np.stack([g[:, p, p] if p == q else g[:, p, q] + g[:, q, p] for p, q in pairs])
-        DE = np.einsum("ab,bjeq->ajeq", D, E, optimize=True)
-        data[:, :, e] = np.einsum("aieq,ajeq,eq->ije", E, DE, dx[e], optimize=True)
-    dofs = basis.element_dofs  # (nloc, nel)
-    rows = np.broadcast_to(dofs[:, None, :], data.shape).ravel()
-    cols = np.broadcast_to(dofs[None, :, :], data.shape).ravel()
-    return sp.coo_matrix((data.ravel(), (rows, cols)), shape=(basis.N, basis.N)).tocsr()
-
-
-def _facet_normals_3d(m, facets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Outward unit normals (n_f, 3) and areas (n_f,) of boundary facets of a 3-D mesh
-    (triangles: exact; quadrilaterals: the normal of the diagonals' cross product, the area
-    of the two triangles split along a diagonal)."""
-    P = m.p[:, m.facets[:, facets]]  # (3, n_vertices, n_f)
-    if P.shape[1] == 3:
-        c = np.cross((P[:, 1] - P[:, 0]).T, (P[:, 2] - P[:, 0]).T)
-        area = 0.5 * np.linalg.norm(c, axis=1)
-    else:
-        # scikit-fem's quadrilateral facets of a hexahedron: vertices in cyclic order
-        c = np.cross((P[:, 2] - P[:, 0]).T, (P[:, 3] - P[:, 1]).T)
-        t1 = np.cross((P[:, 1] - P[:, 0]).T, (P[:, 2] - P[:, 0]).T)
-        t2 = np.cross((P[:, 2] - P[:, 0]).T, (P[:, 3] - P[:, 0]).T)
-        area = 0.5 * (np.linalg.norm(t1, axis=1) + np.linalg.norm(t2, axis=1))
-    n = c / np.linalg.norm(c, axis=1)[:, None]
-    centre = m.p[:, m.t[:, m.f2t[0, facets]]].mean(axis=1).T
-    flip = np.sum(n * (P.mean(axis=1).T - centre), axis=1) < 0
-    n[flip] *= -1
-    return n, area

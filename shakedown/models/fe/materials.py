@@ -3,8 +3,9 @@
 The in-plane stiffness ``D`` maps the engineering strain ``(eps_xx, eps_yy, gamma_xy)``
 (``gamma_xy = 2 eps_xy``) to the stress ``(sig_xx, sig_yy, sig_xy)``, i.e. Voigt order
 ``(xx, yy, xy)``.  A 3-D material (``plane="3d"``) has the full ``6 x 6`` stiffness in Voigt
-order ``(xx, yy, zz, yz, xz, xy)`` with engineering shear strains.  In the notation of seed ``001`` (Agwa & Pinto da Costa 2007),
-``D44 = C_xyxy = D[2, 2]`` and ``D24 = C_yyxy = D[1, 2]`` (y = contact normal).
+order ``(xx, yy, zz, yz, xz, xy)`` with engineering shear strains.  In the notation of seed
+``001`` (Agwa & Pinto da Costa 2007), ``D44 = C_xyxy = D[2, 2]`` and ``D24 = C_yyxy = D[1, 2]``
+(y = contact normal; ``D[5, 5]`` and ``D[1, 5]`` of a 3-D material).
 """
 
 from __future__ import annotations
