@@ -40,6 +40,8 @@ from .steady_maps import (
     _PeriodMap,
     natural_slip_scale,
     sample_initial_slips,
+    slip_measure,
+    tangential_stiffness,
 )
 
 __all__ = [
@@ -57,7 +59,7 @@ class SteadyCycle:
 
     Attributes
     ----------
-    slip : ndarray, shape (N,)
+    slip : ndarray, shape (N,) or (N, 2) for a 3-D system
         Slip state at the start of the steady cycle (the fixed point) [slip units].
     steady_dissipation : float
         Dissipation per load period ``W`` of the steady cycle [force x slip]; for period 2, the
@@ -123,7 +125,7 @@ def steady_cycle(system, load, lam: float, initial_slip=None, *, method: str = "
     load : LoadCycle
     lam : float
         Load factor (``>= 0``).
-    initial_slip : array_like, shape (N,), optional
+    initial_slip : array_like, shape (N,) (3-D: (N, 2)), optional
         Starting state (zeros by default).  Locked-in slips of nodes that stay stuck are kept,
         so the answer is the steady cycle reached from (near) this state.
     method, steps_per_cycle, tol
@@ -151,9 +153,11 @@ def steady_cycle(system, load, lam: float, initial_slip=None, *, method: str = "
         periodic by :func:`solve_cycles` itself.  Otherwise the remaining budget is spent on plain
         cycling and its outcome is reported (``status == "cycling"``).
     """
-    n = system.n_nodes
+    dim = getattr(system, "dim", 2)
+    n = system.n_nodes * (2 if dim == 3 else 1)  # 3-D: the map acts on flat slips (2N,)
     lam = _check_common(system, load, lam)
-    x = np.zeros(n) if initial_slip is None else _check_slip("initial_slip", initial_slip, n)
+    x = np.zeros(n) if initial_slip is None else _check_slip("initial_slip", initial_slip,
+                                                             system.n_nodes, dim)
     if period not in ("auto", 1, 2):
         raise InputError(f"period must be 'auto', 1 or 2; got {period!r}")
     if accelerator not in ("auto", "newton", "anderson"):
@@ -167,12 +171,13 @@ def steady_cycle(system, load, lam: float, initial_slip=None, *, method: str = "
     scale = float(np.max(natural_slip_scale(system, load, lam)))
     budget = int(max_evaluations)
     history = []
-    diag_a = system.A.diagonal()
+    diag_a = tangential_stiffness(system)
     force = [None]
 
     def resid(x, y):
-        # the state-change measure of solve_cycles: max_j A_jj |dv_j| / F (F: its force scale)
-        return float(np.max(diag_a * np.abs(y - x))) / force[0]
+        # the state-change measure of solve_cycles: max_j A_jj |dv_j| / F (F: its force scale;
+        # 3-D: |dv_j| Euclidean, A_jj the node's tangential stiffness)
+        return float(np.max(diag_a * slip_measure(system, y - x))) / force[0]
 
     for i in range(max(int(warmup), 1)):  # at least one: it also gives the force scale
         x, run0 = P(x, 1)
@@ -275,7 +280,7 @@ def steady_cycle(system, load, lam: float, initial_slip=None, *, method: str = "
             ver = resid(starts[-per - 1], starts[-1])
         x = np.asarray(run.final_slip, float) if per == 0 else starts[max(len(starts) - per - 1, 0)]
     return SteadyCycle(
-        slip=np.asarray(x, float),
+        slip=np.asarray(x, float).reshape(P.shape),
         steady_dissipation=float(run.steady_dissipation) if per else float("nan"),
         period=per,
         shook_down=bool(run.shook_down) if per else False,

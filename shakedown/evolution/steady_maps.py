@@ -18,6 +18,34 @@ FD_STEP = 1e-6
 
 
 # ------------------------------------------------------------------ scales and sampling
+def tangential_stiffness(system) -> np.ndarray:
+    """Per node the stiffness that measures its slip, shape (N,): ``A_jj`` (2-D) or the mean
+    of the node's two diagonal entries of ``A`` (3-D) [force / length]."""
+    a = np.asarray(system.A.diagonal(), float)
+    return 0.5 * (a[0::2] + a[1::2]) if getattr(system, "dim", 2) == 3 else a
+
+
+def slip_measure(system, x) -> np.ndarray:
+    """``|v_j|`` per node of a slip vector ``x``: (N,) for 2-D; a flat (2N,) or (N, 2) 3-D slip
+    gives its Euclidean norm per node."""
+    x = np.asarray(x, float)
+    if getattr(system, "dim", 2) == 3:
+        return np.hypot(*x.reshape(-1, 2).T)
+    return np.abs(x)
+
+
+def _natural_slip_scale_3d(system, load, lam):
+    f = system.friction_xy.max(axis=1)
+    t = np.arange(256) / 256.0
+    q1, p1 = load.evaluate(t, 1.0)
+    q0, p0 = load.evaluate(t, 0.0)
+    qmax = np.hypot(*(q1 - q0).transpose(2, 0, 1)).max(axis=0)  # sampled: a scale, not a bound
+    pmax = np.abs(p1 - p0).max(axis=0)
+    force = f * np.abs(load.p0) + np.hypot(*load.q0.T) + float(lam) * (qmax + f * pmax)
+    fallback = max(float(np.max(np.abs(load.p0))), float(np.max(np.abs(load.q0))), 1.0)
+    return np.where(force > 0, force, fallback) / tangential_stiffness(system)
+
+
 def natural_slip_scale(system, load, lam: float = 0.0) -> np.ndarray:
     """Per node, the slip whose elastic reaction equals the largest friction/tangential load.
 
@@ -25,6 +53,8 @@ def natural_slip_scale(system, load, lam: float = 0.0) -> np.ndarray:
     [slip units]; never zero (falls back to ``1 / A_kk`` times the largest welded reaction, or
     1).
     """
+    if getattr(system, "dim", 2) == 3:  # 3-D: |q|, k_j the node's tangential stiffness
+        return _natural_slip_scale_3d(system, load, lam)
     f = system.friction
     a = system.A.diagonal()
     qmax = np.maximum(-load.periodic_min(1.0, 0.0)[0], -load.periodic_min(-1.0, 0.0)[0])
@@ -45,6 +75,9 @@ def sample_initial_slips(system, load, n_states: int, rng=None, *, scale: float 
     the vector is shrunk towards 0 until none does.  This is the same box as
     :func:`shakedown.sweep.initial_slips`, drawn from ``numpy.random.default_rng(rng)`` in one
     call ``rng.uniform(-1, 1, (n_states - 1, N))`` so that the states depend on the seed only.
+    A 3-D system gets shape (n_states, N, 2): both components of node ``k`` in the box of
+    ``f_max,k |p0_k| / k_k`` (``k_k``: :func:`tangential_stiffness`), one draw of shape
+    ``(n_states - 1, 2N)``.
     """
     n = system.n_nodes
     n_states = int(n_states)
@@ -54,9 +87,14 @@ def sample_initial_slips(system, load, n_states: int, rng=None, *, scale: float 
         raise InputError(f"scale must be a positive number; got {scale}")
     gen = np.random.default_rng(rng)
     p0 = np.asarray(load.p0, float)
-    s = system.friction * np.abs(p0) / system.A.diagonal()
+    dim3 = getattr(system, "dim", 2) == 3
+    a = tangential_stiffness(system)
+    f = system.friction_xy.max(axis=1) if dim3 else system.friction
+    s = f * np.abs(p0) / a
     fallback = max(float(np.max(np.abs(p0))), float(np.max(np.abs(load.q0))), 1.0)
-    s = np.where(s > 0, s, fallback / system.A.diagonal())
+    s = np.where(s > 0, s, fallback / a)
+    if dim3:  # 3-D: both slip components of node k in the box, shape (n_states, N, 2)
+        n, s = 2 * n, np.repeat(s, 2)
     out = np.zeros((n_states, n))
     u = gen.uniform(-1.0, 1.0, (n_states - 1, n))
     for j in range(1, n_states):
@@ -67,7 +105,7 @@ def sample_initial_slips(system, load, n_states: int, rng=None, *, scale: float 
             room = 0.5 * np.maximum(p0[need], 0.0) / -dp[need]
             v = v * min(1.0, float(room.min()))
         out[j] = v
-    return out
+    return out.reshape(n_states, -1, 2) if dim3 else out
 
 
 class _PeriodMap:
@@ -80,8 +118,13 @@ class _PeriodMap:
         self.system, self.load, self.lam, self.kw = system, load, lam, solver_kw
         self.count = 0
 
+        # 3-D: the map acts on flat slips (2N,), reshaped to (N, 2) for solve_cycles
+        self.shape = (system.n_nodes, 2) if getattr(system, "dim", 2) == 3 else (
+            system.n_nodes,)
+
     def run(self, x, cycles):
-        run = self._solve(self.system, self.load, self.lam, initial_slip=np.array(x, float),
+        run = self._solve(self.system, self.load, self.lam,
+                          initial_slip=np.array(x, float).reshape(self.shape),
                           max_cycles=int(cycles), **self.kw)
         self.count += int(run.n_cycles)
         return run
@@ -90,8 +133,8 @@ class _PeriodMap:
         run = self.run(x, p)
         starts = np.asarray(run.cycle_start_slips)
         if len(starts) < p + 1:  # the run stopped early (steady within p periods)
-            return np.asarray(run.final_slip, float), run
-        return np.asarray(starts[p], float), run
+            return np.asarray(run.final_slip, float).ravel(), run
+        return np.asarray(starts[p], float).ravel(), run
 
 
 def _check_common(system, load, lam):
@@ -99,7 +142,14 @@ def _check_common(system, load, lam):
     return check_load_factor(lam, load)
 
 
-def _check_slip(name, value, n):
+def _check_slip(name, value, n, dim=2):
+    """A node vector of slips, flat: (N,) in 2-D, (N, 2) given and (2N,) returned in 3-D."""
+    if dim == 3:
+        x = np.array(value, dtype=float)
+        if x.shape != (n, 2) or not np.all(np.isfinite(x)):
+            raise InputError(f"{name} of a 3-D system must be a finite array of shape ({n}, 2); "
+                             f"got shape {x.shape}")
+        return x.ravel()
     return check_node_vector(name, value, n, what="slip")
 
 

@@ -18,6 +18,7 @@ import pandas as pd
 from ..model import citations
 from ..model.errors import InputError, ShapeError
 from .steady import _check_common, natural_slip_scale, sample_initial_slips, steady_cycle
+from .steady_maps import tangential_stiffness
 
 __all__ = ["UniquenessStudy", "uniqueness_study"]
 
@@ -41,7 +42,8 @@ class UniquenessStudy:
         ``shook_down``, ``stuck`` (the permanently stuck nodes as ``"0,3"``; ``""`` for none),
         ``n_stuck``, ``cycles_to_steady``, ``n_cycles`` (periods simulated), ``period``,
         ``status``, ``initial_slip_<j>`` and ``steady_slip_<j>`` (slips at the start of the steady
-        cycle) for every node ``j``.
+        cycle) for every node ``j`` (3-D: ``initial_slip_<j>_x``, ``initial_slip_<j>_y``, ...;
+        slip and reaction spreads then over both components).
     lam : float
     unique_dissipation : bool
         Every run reached a steady cycle and ``dissipation_spread <= w_tol``.
@@ -109,18 +111,26 @@ def _init_worker(system, load, lam, solver, kw):
     _WORKER.update(system=system, load=load, lam=lam, solver=solver, kw=kw)
 
 
-def _histories(run, n_grid: int, n: int):
-    """Centred steady histories (slip, q, p) on ``2 * n_grid`` times, shape (3, 2 n_grid, N)."""
+def _columns(system):
+    """The steady-table columns compared across runs: slips first, then reactions."""
+    if getattr(system, "dim", 2) == 3:
+        return ("slip_x", "slip_y", "q_x", "q_y", "p"), 2
+    return ("slip", "q", "p"), 1
+
+
+def _histories(run, n_grid: int, n: int, cols=("slip", "q", "p"), n_slip=1):
+    """Centred steady histories (the ``cols`` of the steady table, slips first) on
+    ``2 * n_grid`` times, shape (len(cols), 2 n_grid, N)."""
     tab = run.steady_table
     per = int(run.period)
-    out = np.full((3, 2 * n_grid, n), np.nan)
+    out = np.full((len(cols), 2 * n_grid, n), np.nan)
     if per == 0 or tab is None or len(tab) == 0:
         return out
     t = tab["t"].to_numpy(float)
     t = t - t.min()  # the table starts at the orbit's start (an integer time)
     node = tab["node"].to_numpy(int)
     grid = (np.arange(per * n_grid) + 1.0) / n_grid
-    for k, col in enumerate(("slip", "q", "p")):
+    for k, col in enumerate(cols):
         vals = tab[col].to_numpy(float)
         h = np.empty((per * n_grid, n))
         for j in range(n):
@@ -130,7 +140,9 @@ def _histories(run, n_grid: int, n: int):
             h = np.concatenate([h, h])
         out[k] = h
     if per == 2:
-        path = np.abs(np.diff(np.concatenate([out[0][-1:], out[0]]), axis=0)).sum(axis=1)
+        sl = out[:n_slip]
+        path = np.sqrt((np.diff(np.concatenate([sl[:, -1:], sl], axis=1), axis=1) ** 2).sum(
+            axis=0)).sum(axis=1)
         if path[n_grid:].sum() > path[:n_grid].sum():
             out = np.roll(out, -n_grid, axis=1)
     return out - out.mean(axis=1, keepdims=True)
@@ -140,6 +152,8 @@ def _one_state(args):
     index, v0 = args
     w = _WORKER
     system, n = w["system"], w["system"].n_nodes
+    cols, n_slip = _columns(system)
+    shape = (n, 2) if getattr(system, "dim", 2) == 3 else (n,)
     try:
         if w["solver"] == "steady":
             sc = steady_cycle(system, w["load"], w["lam"], v0, **w["kw"])
@@ -156,7 +170,8 @@ def _one_state(args):
     except (ValueError, RuntimeError, ArithmeticError) as exc:
         row = dict(steady_dissipation=np.nan, shook_down=False, stuck="", n_stuck=0,
                    cycles_to_steady=-1, n_cycles=0, period=0, status=f"error: {exc}"[:300])
-        return index, row, np.full(n, np.nan), np.full((3, 2 * HISTORY_SAMPLES, n), np.nan)
+        return index, row, np.full(shape, np.nan), np.full((len(cols), 2 * HISTORY_SAMPLES, n),
+                                                           np.nan)
     per = int(run.period)
     stuck = np.asarray(run.stuck_nodes, int) if per else np.zeros(0, int)
     cts = getattr(run, "cycles_to_steady", -1)
@@ -170,7 +185,8 @@ def _one_state(args):
         period=per,
         status=status,
     )
-    return index, row, np.asarray(start, float), _histories(run, HISTORY_SAMPLES, n)
+    return index, row, np.asarray(start, float), _histories(run, HISTORY_SAMPLES, n, cols,
+                                                             n_slip)
 
 
 def uniqueness_study(system, load, lam: float, initial_slips=16, *, rng=None,
@@ -185,7 +201,7 @@ def uniqueness_study(system, load, lam: float, initial_slips=16, *, rng=None,
     system : DiscreteSystem
     load : LoadCycle
     lam : float
-    initial_slips : array_like, shape (n_states, N), or int
+    initial_slips : array_like, shape (n_states, N) (3-D: (n_states, N, 2)), or int
         The initial slips, or how many to sample with :func:`sample_initial_slips` (state 0 is
         ``v = 0``, the others uniform in a box of ``scale`` natural slips, every node closed).
     rng : int, numpy.random.Generator or None
@@ -227,12 +243,13 @@ def uniqueness_study(system, load, lam: float, initial_slips=16, *, rng=None,
             raise InputError(
                 f"initial_slips must be a count or an array (n_states, {n}); got {initial_slips!r}"
             ) from exc
-        if states.ndim == 1 and n == 1:
+        want = (n, 2) if getattr(system, "dim", 2) == 3 else (n,)
+        if states.ndim == 1 and n == 1 and want == (1,):
             states = states[:, None]
-        if states.ndim != 2 or states.shape[1] != n or states.shape[0] < 1:
+        if states.shape[1:] != want or states.shape[0] < 1:
             raise ShapeError(
-                f"initial_slips must have shape (n_states, {n}) with n_states >= 1; got "
-                f"{states.shape}"
+                f"initial_slips must have shape (n_states, {', '.join(map(str, want))}) with "
+                f"n_states >= 1; got {states.shape}"
             )
         if not np.all(np.isfinite(states)):
             raise InputError("initial_slips must be finite")
@@ -273,10 +290,17 @@ def _verdict(system, load, lam, states, results, w_rtol):
     n = system.n_nodes
     rows = []
     hist = np.array([r[3] for r in results])  # (S, 3, 2G, N)
+    dim3 = getattr(system, "dim", 2) == 3
+    _, n_slip = _columns(system)
     for (i, row, start, _), v0 in zip(results, states, strict=True):
         row = {"state": i, **row}
-        row.update({f"initial_slip_{j}": float(v0[j]) for j in range(n)})
-        row.update({f"steady_slip_{j}": float(start[j]) for j in range(n)})
+        if dim3:  # 3-D: initial_slip_<j>_x, initial_slip_<j>_y, ...
+            for name, arr in (("initial_slip", v0), ("steady_slip", start)):
+                row.update({f"{name}_{j}_{c}": float(arr[j][a]) for j in range(n)
+                            for a, c in enumerate("xy")})
+        else:
+            row.update({f"initial_slip_{j}": float(v0[j]) for j in range(n)})
+            row.update({f"steady_slip_{j}": float(start[j]) for j in range(n)})
         rows.append(row)
     table = pd.DataFrame(rows)
     W = table["steady_dissipation"].to_numpy(float)
@@ -285,17 +309,19 @@ def _verdict(system, load, lam, states, results, w_rtol):
     spread = float(Wok.max() - Wok.min()) if Wok.size else float("nan")
     s_nat = natural_slip_scale(system, load, lam)
     slip_scale = float(np.max(s_nat))
-    force = float(np.max(s_nat * system.A.diagonal()))  # largest friction / tangential load
+    k_t = tangential_stiffness(system)
+    force = float(np.max(s_nat * k_t))  # largest friction / tangential load
     w_tol = float(w_rtol) * max(float(np.max(np.abs(Wok))) if Wok.size else 0.0,
                                 force * slip_scale)
     if steady.sum() >= 1:
         h = hist[steady]
         rng_ = np.nanmax(h, axis=0) - np.nanmin(h, axis=0)  # (3, 2G, N)
-        slip_spread = float(np.nanmax(rng_[0])) if np.isfinite(rng_[0]).any() else float("nan")
-        reac_spread = float(np.nanmax(rng_[1:])) if np.isfinite(rng_[1:]).any() else float("nan")
+        sl, rc = rng_[:n_slip], rng_[n_slip:]
+        slip_spread = float(np.nanmax(sl)) if np.isfinite(sl).any() else float("nan")
+        reac_spread = float(np.nanmax(rc)) if np.isfinite(rc).any() else float("nan")
     else:
         slip_spread = reac_spread = float("nan")
-    tv = max(slip_spread * float(np.max(system.A.diagonal())), reac_spread) / force
+    tv = max(slip_spread * float(np.max(k_t)), reac_spread) / force
     return UniquenessStudy(
         table=table,
         lam=float(lam),

@@ -35,6 +35,23 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as sla
 
+from .critical import CriticalFriction
+
+
+def critical_friction_3d(system) -> CriticalFriction:
+    """The 3-D counterpart of :func:`~.critical.critical_friction_2d` (see module docstring):
+    ``factor`` is the sufficient multiplier ``alpha_s`` (``exact`` only when ``B = 0`` or the
+    friction vanishes, where the step is unique for every friction), ``value = alpha_s *
+    max(f)``, ``upper_bound = inf`` (no necessary bound is computed in 3-D),
+    ``method = "sufficient-bound-3d"`` / ``"uncoupled"`` / ``"frictionless"``."""
+    fxy = system.friction_xy
+    factor, exact, method = sufficient_factor_3d(system.A, system.B, system.C, fxy)
+    fmax = float(fxy.max()) if fxy.size else 0.0
+    return CriticalFriction(factor=float(factor),
+                            value=float(factor * fmax) if fmax > 0 else float("inf"),
+                            exact=exact, upper_bound=float("inf"), method=method,
+                            well_posed=bool(factor > 1.0))
+
 
 def sufficient_factor_3d(A, B, C, friction_xy):
     """Largest multiplier ``alpha`` of the friction profile keeping the bound of the module
@@ -72,4 +89,4 @@ def sufficient_factor_3d(A, B, C, friction_xy):
     return 2.0 * float(np.sqrt(s / c)), False, "sufficient-bound-3d"
 
 
-__all__ = ["sufficient_factor_3d"]
+__all__ = ["sufficient_factor_3d", "critical_friction_3d"]

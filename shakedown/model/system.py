@@ -384,14 +384,20 @@ class DiscreteSystem:
         ``alpha_s = sqrt(lambda_min(A - B C^-1 B^T) / lambda_max(F C F))`` (positive definiteness of
         ``M_S`` for every ``S``), with the necessary single-node bound ``min_j A_jj / |B_jj| / f_j``.
 
+        For ``dim = 3`` a sufficient bound ``lambda_max(F C F) < 4 lambda_min(A - B C^-1 B^T)``
+        with its proof (:mod:`shakedown.model.critical3d`).
+
         Returns
         -------
         CriticalFriction
         """
-        if self.dim == 3:
-            raise NotImplementedError(
-                "critical_friction is not available for dim = 3 systems yet (the 3-D "
-                "counterpart of Klarbring's criterion comes with the 3-D step engine)")
+        if self.dim == 3:  # a sufficient bound with its proof: shakedown/model/critical3d.py
+            from .critical3d import critical_friction_3d
+
+            cache = self.__dict__.setdefault("_critical_cache", {})
+            if "3d" not in cache:
+                cache["3d"] = critical_friction_3d(self)
+            return cache["3d"]
         citations.register("klarbring1990")
         cache = self.__dict__.setdefault("_critical_cache", {})
         key = int(max_exact_nodes)
