@@ -374,7 +374,8 @@ def _patch_plots(ctx, run, lam, units):
     fig, axs = plt.subplots(2, 2, figsize=(9, 8.4), sharex=True, sharey=True)
     for ax, t in zip(axs.ravel(), (0.0, 0.25, 0.5, 0.75), strict=True):
         plot_patch_states(ctx.model, run, t, ax, units=units)
-    axs[0, 0].legend(fontsize="small", loc="lower left")
+    fig.legend(*axs[0, 0].get_legend_handles_labels(), loc="lower center", ncol=3,
+               fontsize="small")
     fig.suptitle(f"contact patch over the steady cycle at lam = {lam:.4g}: node states, arrows "
                  f"q (longest {qmax:.3g} {units['force']})", fontsize=10)
     ctx.output.save_figure("contact_patch.png", fig)
