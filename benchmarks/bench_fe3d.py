@@ -16,6 +16,11 @@ compares the two ``K`` (``system.K.toarray()``) in the uncondensed worker (not t
 Printed: medians (and worst) of the model's wall-clock and CPU (process) time, peak RSS,
 ``nnz(K_z)`` and the dense ``K`` bytes.
 Results: ``RESULTS_fe3d.md``, ``fe3d.json``.
+
+``--assembly``: the 3-D stiffness assembly alone, ``Body.stiffness()`` (each local function's
+strains once per element block) against scikit-fem's ``asm`` of the form ``eps(u) . D eps(v)``
+(the per-pair form the 2-D bodies use), side by side in one process, median of ``--repeats``,
+with the largest entry difference.
 """
 
 from __future__ import annotations
@@ -29,6 +34,9 @@ import sys
 import time
 
 import numpy as np
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, ROOT)  # this checkout's package, not an installed one
 
 
 def model(n: int, element: str):
@@ -66,6 +74,42 @@ def worker(n: int, kind: str, element: str, check: bool):
                       "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}))
 
 
+def assembly(ns, element, repeats):
+    from skfem import BilinearForm, asm
+    from skfem.helpers import sym_grad
+
+    from shakedown import fe
+
+    pairs = ((0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1))
+    for n in ns:
+        body = fe.Body(fe.box(1.0, 1.0, 0.25, n, n, max(2, n // 4), element=element),
+                       fe.isotropic(1.0, 0.3, plane="3d"))
+        D = body.material.D
+        _ = body.basis
+
+        @BilinearForm
+        def form(u, v, w, D=D):
+            e, f = sym_grad(u), sym_grad(v)
+            eu = [e[i, j] * (1 if i == j else 2) for i, j in pairs]
+            ev = [f[i, j] * (1 if i == j else 2) for i, j in pairs]
+            return sum(D[i, j] * eu[j] * ev[i] for i in range(6) for j in range(6)
+                       if D[i, j] != 0.0)
+
+        tv, tf = [], []
+        for _ in range(repeats):
+            t0 = time.process_time()
+            K = body.stiffness()
+            t1 = time.process_time()
+            ref = asm(form, body.basis).tocsr()
+            tf.append(time.process_time() - t1)
+            tv.append(t1 - t0)
+        diff = abs(K - ref).max() / abs(ref).max()
+        print(f"assembly n={n:3d} {element} dofs={body.n_dofs:6d}: vectorised "
+              f"{np.median(tv):7.3f} s CPU (worst {max(tv):.3f}), per-pair form "
+              f"{np.median(tf):7.3f} s (worst {max(tf):.3f}), ratio {np.median(tf) / np.median(tv):5.1f}, "
+              f"max|dK|/max|K| {diff:.1e}", flush=True)
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--n", type=int, nargs="+", default=[4, 8, 12, 16, 24])
@@ -74,13 +118,17 @@ def main():
     ap.add_argument("--check", action="store_true")
     ap.add_argument("--json", default="benchmarks/fe3d.json")
     ap.add_argument("--worker", nargs=2)
+    ap.add_argument("--assembly", action="store_true")
     a = ap.parse_args()
+    if a.assembly:
+        print(f"uptime: {os.popen('uptime').read().strip()}")
+        assembly(a.n, a.element, a.repeats)
+        print(f"uptime: {os.popen('uptime').read().strip()}")
+        return
     if a.worker:
         worker(int(a.worker[0]), a.worker[1], a.element, a.check)
         return
-    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # this checkout's package
-    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1",
-               PYTHONPATH=root + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
     rows = []
     print(f"uptime: {os.popen('uptime').read().strip()}")
     for n in a.n:
