@@ -276,3 +276,39 @@ def test_vectorised_stiffness_equals_scikit_fem_form(element):
 
     K, ref = body.stiffness(), asm(form, body.basis).tocsr()
     assert abs(K - ref).max() <= 1e-14 * abs(ref).max()
+
+
+def test_mass_dynamic_stiffness_and_cache(tmp_path):
+    """``condense(mass=True)`` in 3-D: the Guyan mass is symmetric positive semi-definite and
+    ``dynamic_stiffness(s)`` is the Schur complement of ``K_z + s M_z`` (dense, independent);
+    the on-disk cache gives back the same 3-D model."""
+    model = fe.FEModel(fe.box(1, 1, 0.5, 2, 2, 1, element="P1"),
+                       fe.isotropic(E, NU, plane="3d", density=2.0), dirichlet=["top"],
+                       contact=["bottom"], loads={"push": fe.Displacement("top", (0.1, 0, -0.1))})
+    # one layer: no interior DOF, the Guyan mass is the contact block itself
+    thin = model.condense(mass=True)
+    assert thin.counts["n_interior_dofs"] == 0
+    np.testing.assert_array_equal(thin.M, thin._assembled().Mcc)
+    model = fe.FEModel(fe.box(1, 1, 0.5, 2, 2, 2, element="P1"),
+                       fe.isotropic(E, NU, plane="3d", density=2.0), dirichlet=["top"],
+                       contact=["bottom"], loads={"push": fe.Displacement("top", (0.1, 0, -0.1))})
+    cm = model.condense(mass=True)
+    M = cm.M
+    assert M.shape == cm.K.shape and np.array_equal(M, M.T)
+    assert np.linalg.eigvalsh(M)[0] > -1e-14 * np.abs(M).max()
+    a = cm._assembled()
+    nc = 3 * cm.n_nodes
+    s = 0.7
+    Mz = np.block([[a.Mcc, a.Mci.toarray()], [a.Mci.T.toarray(), a.Mii.toarray()]])
+    Z = a.Kz.toarray() + s * Mz
+    ref = Z[:nc, :nc] - Z[:nc, nc:] @ np.linalg.solve(Z[nc:, nc:], Z[nc:, :nc])
+    np.testing.assert_allclose(cm.dynamic_stiffness(s), ref, rtol=0,
+                               atol=1e-12 * np.abs(ref).max())
+    first = model.condense(cache_dir=tmp_path)
+    again = model.condense(cache_dir=tmp_path)
+    assert again.from_cache and again.dim == 3 and again.n_nodes == first.n_nodes
+    np.testing.assert_array_equal(again.K, first.K)
+    np.testing.assert_array_equal(again.tangents, first.tangents)
+    for x, y in zip(again.welded["push"], first.welded["push"], strict=True):
+        np.testing.assert_array_equal(x, y)
+    assert again.load_cycle(static="push").q0.shape == (cm.n_nodes, 2)

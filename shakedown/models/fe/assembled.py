@@ -301,6 +301,8 @@ class Assembled:
         """``T^T M T`` with ``T = [I; -X]``, ``X = K_ii^-1 K_ic`` (blocked by memory budget)."""
         N2 = self.nc
         Mg = np.array(self.Mcc, copy=True)
+        if self.n_int == 0:  # every node is a contact or held node: nothing to condense
+            return 0.5 * (Mg + Mg.T)
         Kic, Mic = self.Kci.T.tocsc(), self.Mci.T.tocsc()
         n_i = max(self.n_int, 1)
         if 8 * n_i * N2 <= GUYAN_FULL_BYTES:  # one pass: X in memory
