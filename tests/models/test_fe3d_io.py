@@ -47,6 +47,7 @@ def test_gmsh_physical_groups_become_boundaries(name, kind, element, n_contact):
     assert ev[0] > 0
 
 
+@pytest.mark.slow  # ~25 s: 270 contact nodes of quadratic tetrahedra (P2 on boxes: test_fe3d.py)
 def test_quadratic_tetrahedra_on_a_linear_gmsh_mesh():
     """``element='P2'`` on the linear tetrahedra of the file: mid-edge nodes join the contact,
     and the stiffer quadratic field gives the same total welded reaction within 5 %."""
