@@ -42,29 +42,35 @@ class SchurStiffness:
 
     Parameters
     ----------
-    Kz : scipy.sparse matrix, shape (2N + m, 2N + m)
-        Symmetric; its first ``2N`` rows and columns are the contact unknowns in the order
-        ``(v_1 .. v_N, w_1 .. w_N)`` [force / length], the last ``m`` the interior DOFs.
+    Kz : scipy.sparse matrix, shape (dim N + m, dim N + m)
+        Symmetric; its first ``dim N`` rows and columns are the contact unknowns in the order
+        ``(v_1 .. v_N, w_1 .. w_N)`` (2-D) or ``(v_1x, v_1y, .., v_Nx, v_Ny, w_1 .. w_N)``
+        (3-D) [force / length], the last ``m`` the interior DOFs.
     n_nodes : int
         ``N``.
+    dim : {2, 3}
+        Space dimension (``dim - 1`` tangential unknowns per node).
     """
 
     ndim = 2
     dtype = np.dtype(float)
     __array_ufunc__ = None  # ``ndarray @ K`` defers to ``K.__rmatmul__``
 
-    def __init__(self, Kz, n_nodes: int):
+    def __init__(self, Kz, n_nodes: int, dim: int = 2):
         if not sp.issparse(Kz):
             raise InputError(f"Kz must be a scipy.sparse matrix; got {type(Kz).__name__}")
+        if dim not in (2, 3):
+            raise InputError(f"dim must be 2 or 3; got {dim!r}")
         Kz = sp.csr_matrix(Kz, dtype=float)
         n = int(n_nodes)
-        if Kz.shape[0] != Kz.shape[1] or n < 1 or Kz.shape[0] < 2 * n:
-            raise ShapeError(f"Kz must be square with at least 2 * n_nodes = {2 * n} rows; got "
-                             f"shape {Kz.shape}")
+        if Kz.shape[0] != Kz.shape[1] or n < 1 or Kz.shape[0] < dim * n:
+            raise ShapeError(f"Kz must be square with at least {dim} * n_nodes = {dim * n} rows; "
+                             f"got shape {Kz.shape}")
         Kz.sum_duplicates()
         Kz.sort_indices()
-        self.Kz, self.n, self.n_interior = Kz, n, Kz.shape[0] - 2 * n
-        c = 2 * n
+        self.dim, self.nt, self.m = dim, (dim - 1) * n, dim * n
+        self.Kz, self.n, self.n_interior = Kz, n, Kz.shape[0] - dim * n
+        c = dim * n
         self.Kcc = Kz[:c, :c].tocsr()
         self.Kci = Kz[:c, c:].tocsr()
         self.Kic = Kz[c:, :c].tocsc()  # columns of K_ic: right-hand sides of the solves
@@ -82,7 +88,7 @@ class SchurStiffness:
     # ------------------------------------------------------------------ basics
     @property
     def shape(self) -> tuple[int, int]:
-        return (2 * self.n, 2 * self.n)
+        return (self.m, self.m)
 
     @property
     def T(self) -> SchurStiffness:
@@ -90,7 +96,7 @@ class SchurStiffness:
 
     @property
     def nnz(self) -> int:
-        """Stored entries of ``K_z`` (the dense ``K`` would hold ``4 N^2``)."""
+        """Stored entries of ``K_z`` (the dense ``K`` would hold ``(dim N)^2``)."""
         return int(self.Kz.nnz)
 
     @property
@@ -112,10 +118,10 @@ class SchurStiffness:
     # ------------------------------------------------------------------ products
     def __matmul__(self, x):
         x = np.asarray(x, float)
-        if x.shape[0] != 2 * self.n:
-            raise ShapeError(f"K @ x needs x with {2 * self.n} rows; got shape {x.shape}")
+        if x.shape[0] != self.m:
+            raise ShapeError(f"K @ x needs x with {self.m} rows; got shape {x.shape}")
         if x.ndim == 2 and x.shape[1] > 1:  # blocks of columns within the memory budget
-            out = np.empty((2 * self.n, x.shape[1]))
+            out = np.empty((self.m, x.shape[1]))
             for s in self._blocks(x.shape[1]):
                 out[:, s] = self._apply(x[:, s])
             return out
@@ -137,10 +143,11 @@ class SchurStiffness:
 
     # ------------------------------------------------------------------ entries
     def columns(self, idx) -> np.ndarray:
-        """Dense columns ``K[:, idx]``, shape (2N, len(idx)) (one solve per column, blocked)."""
-        idx = np.arange(2 * self.n)[idx] if isinstance(idx, slice) else np.atleast_1d(
+        """Dense columns ``K[:, idx]``, shape (dim N, len(idx)) (one solve per column,
+        blocked)."""
+        idx = np.arange(self.m)[idx] if isinstance(idx, slice) else np.atleast_1d(
             np.asarray(idx, int))
-        out = np.empty((2 * self.n, idx.size))
+        out = np.empty((self.m, idx.size))
         for s in self._blocks(idx.size):
             cols = idx[s]
             block = self.Kcc[:, cols].toarray()
@@ -158,35 +165,40 @@ class SchurStiffness:
             rows, cols = key
             rows = np.ravel(rows) if not isinstance(rows, slice) else rows
             cols = np.ravel(cols) if not isinstance(cols, slice) else cols
-            return self.columns(rows).T[:, cols] if _count(rows, self.n) <= _count(
-                cols, self.n) else self.columns(cols)[rows]
+            return self.columns(rows).T[:, cols] if _count(rows, self.m) <= _count(
+                cols, self.m) else self.columns(cols)[rows]
         single = np.ndim(key) == 0 and not isinstance(key, slice)
         rows = self.columns(key).T
         return rows[0] if single else rows
 
     def diagonal(self) -> np.ndarray:
-        """``diag(K)`` (``2N`` solves with ``K_ii`` in blocks, computed once), shape (2N,)."""
+        """``diag(K)`` (``dim N`` solves with ``K_ii`` in blocks, computed once), shape (dim N,)."""
         if self._diag is None:
             self._diag = self._diagonals()[0]
         return self._diag.copy()
 
     def _diagonals(self):
-        """``diag(K)`` and ``diag(B)`` (the coupling ``K[j, N + j]``), from the columns in
-        blocks; the dense ``C`` block is kept from the same columns within
-        :data:`DENSE_C_BYTES`."""
-        n = self.n
-        d = np.empty(2 * n)
-        db = np.empty(n)
+        """``diag(K)`` and ``diag(B)`` (the coupling ``K[j, N + j]``; in 3-D the node blocks
+        ``K[2j + a, 2N + j]``, shape (N, 2)), from the columns in blocks; the dense ``C``
+        block is kept from the same columns within :data:`DENSE_C_BYTES`."""
+        n, nt, t = self.n, self.nt, self.dim - 1
+        d = np.empty(self.m)
+        db = np.empty(n) if t == 1 else np.empty((n, 2))
         C = np.empty((n, n)) if 8 * n * n <= DENSE_C_BYTES else None
         for s in self._blocks(n):
             j = np.arange(n)[s]
-            colsv = self.columns(j)
-            colsw = self.columns(n + j)
-            d[j] = colsv[j, np.arange(j.size)]
-            d[n + j] = colsw[n + j, np.arange(j.size)]
-            db[j] = colsw[j, np.arange(j.size)]
+            k = np.arange(j.size)
+            colsw = self.columns(nt + j)
+            for a in range(t):
+                colsv = self.columns(t * j + a)
+                d[t * j + a] = colsv[t * j + a, k]
+                if t == 1:
+                    db[j] = colsw[j, k]
+                else:
+                    db[j, a] = colsw[t * j + a, k]
+            d[nt + j] = colsw[nt + j, k]
             if C is not None:
-                C[:, j] = colsw[n:]
+                C[:, j] = colsw[nt:]
         self._diag, self._diag_b = d, db
         if C is not None:
             self._C = 0.5 * (C + C.T)
@@ -200,20 +212,21 @@ class SchurStiffness:
         return self._C
 
     def block_diagonals(self):
-        """``(diag A, diag B, diag C)`` of ``K = [[A, B], [B^T, C]]``, each shape (N,)."""
+        """``(diag A, diag B, diag C)`` of ``K = [[A, B], [B^T, C]]``, shapes (N,) in 2-D; in
+        3-D (2N,), (N, 2) (see :meth:`_diagonals`) and (N,)."""
         if self._diag_b is None:
             self._diagonals()
-        n = self.n
-        return self._diag[:n].copy(), self._diag_b.copy(), self._diag[n:].copy()
+        nt = self.nt
+        return self._diag[:nt].copy(), self._diag_b.copy(), self._diag[nt:].copy()
 
     def toarray(self) -> np.ndarray:
-        """The dense ``K`` (the condensation, ``2N`` solves in blocks; exactly symmetric)."""
-        K = self.columns(np.arange(2 * self.n))
+        """The dense ``K`` (the condensation, ``dim N`` solves in blocks; exactly symmetric)."""
+        K = self.columns(np.arange(self.m))
         return 0.5 * (K + K.T)
 
 
-def _count(idx, n) -> int:
-    return 2 * n if isinstance(idx, slice) else np.size(idx)
+def _count(idx, m) -> int:
+    return m if isinstance(idx, slice) else np.size(idx)
 
 
 class SchurBlock:
@@ -228,19 +241,20 @@ class SchurBlock:
 
     @property
     def shape(self):
-        return (self.K.n, self.K.n)
+        return (self._sl(self.rows).stop - self._sl(self.rows).start,
+                self._sl(self.cols).stop - self._sl(self.cols).start)
 
     @property
     def T(self) -> SchurBlock:
         return SchurBlock(self.K, self.cols, self.rows)
 
     def _sl(self, half):
-        n = self.K.n
-        return slice(half * n, (half + 1) * n)
+        nt = self.K.nt
+        return slice(0, nt) if half == 0 else slice(nt, self.K.m)
 
     def __matmul__(self, x):
         x = np.asarray(x, float)
-        full = np.zeros((2 * self.K.n,) + x.shape[1:])
+        full = np.zeros((self.K.m,) + x.shape[1:])
         full[self._sl(self.cols)] = x
         return (self.K @ full)[self._sl(self.rows)]
 
@@ -252,5 +266,4 @@ class SchurBlock:
         return {(0, 0): a, (0, 1): b, (1, 0): b, (1, 1): c}[(self.rows, self.cols)]
 
     def toarray(self) -> np.ndarray:
-        n = self.K.n
-        return self.K.columns(np.arange(n) + self.cols * n)[self._sl(self.rows)]
+        return self.K.columns(np.arange(self.K.m)[self._sl(self.cols)])[self._sl(self.rows)]

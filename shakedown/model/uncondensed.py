@@ -34,16 +34,19 @@ class UncondensedSystem(DiscreteSystem):
 
     Parameters
     ----------
-    Kz : scipy.sparse matrix, shape (2N + m, 2N + m)
+    Kz : scipy.sparse matrix, shape (dim N + m, dim N + m)
         Symmetric positive definite stiffness [force / length]: first the slips ``v`` of the
-        ``N`` contact nodes, then their gaps ``w``, then ``m`` interior DOFs (the reactions on
-        the interior DOFs are zero: their loads are in the welded reactions).
+        ``N`` contact nodes (in 3-D node by node, ``(v_1x, v_1y, ..., v_Nx, v_Ny)``), then their
+        gaps ``w``, then ``m`` interior DOFs (the reactions on the interior DOFs are zero: their
+        loads are in the welded reactions).
     n_nodes : int
         ``N``.
     friction : float or array_like, shape (N,)
         Coulomb friction coefficient of each node (``>= 0``).
     symmetry_rtol : float, optional
         Relative tolerance of the symmetry check of ``K_z``.
+    dim : {2, 3}
+        Space dimension of the contact (``dim - 1`` slip components per node).
 
     Raises
     ------
@@ -63,7 +66,7 @@ class UncondensedSystem(DiscreteSystem):
     """
 
     def __init__(self, Kz, n_nodes: int, friction, *, symmetry_rtol: float = SYMMETRY_RTOL,
-                 _stiffness: SchurStiffness | None = None):
+                 dim: int = 2, _stiffness: SchurStiffness | None = None):
         rtol = symmetry_rtol
         if isinstance(rtol, bool) or not isinstance(rtol, (int, float, np.floating)) \
                 or not 0 <= rtol < 1:
@@ -75,16 +78,18 @@ class UncondensedSystem(DiscreteSystem):
             Kz = (0.5 * (Kz + Kz.T)).tocsr()
             lu = _sparse.check_sparse_conditioning("Kz (uncondensed stiffness)", Kz,
                                                    max_condition=np.inf)  # SPD
-            _stiffness = SchurStiffness(Kz, n_nodes)
+            _stiffness = SchurStiffness(Kz, n_nodes, dim)
             _check_condition(_stiffness, lu)
         K = _stiffness
         set_ = object.__setattr__
         set_(self, "symmetry_rtol", float(rtol))
+        if K.dim == 3:
+            set_(self, "dim", 3)
         self.__dict__["K"] = K
         set_(self, "A", SchurBlock(K, 0, 0))
         set_(self, "B", SchurBlock(K, 0, 1))
         set_(self, "C", SchurBlock(K, 1, 1))
-        set_(self, "friction", _as_friction(friction, K.n))
+        set_(self, "friction", _as_friction(friction, K.n, K.dim))
 
     @property
     def is_sparse(self) -> bool:
@@ -114,9 +119,10 @@ class UncondensedSystem(DiscreteSystem):
         dense = self.__dict__.get("_dense")
         if dense is None:
             K = self.K.toarray()
-            n = self.n_nodes
+            n = self.K.nt
+            extra = {"dim": 3} if self.K.dim == 3 else {}
             dense = DiscreteSystem(K[:n, :n], K[:n, n:], K[n:, n:], self.friction,
-                                   symmetry_rtol=self.symmetry_rtol)
+                                   symmetry_rtol=self.symmetry_rtol, **extra)
             self.__dict__["_dense"] = dense
         return dense
 
@@ -127,12 +133,12 @@ class UncondensedSystem(DiscreteSystem):
     @property
     def is_coupled(self) -> bool:
         """``True`` unless ``B`` is zero to ``COUPLING_RTOL`` (tested on two random slips)."""
-        n = self.n_nodes
-        x = np.random.default_rng(0).standard_normal((2 * n, 2))
+        n, m = self.K.nt, self.K.m
+        x = np.random.default_rng(0).standard_normal((m, 2))
         x[n:] = 0.0
         r = self.K @ x  # (A x, B^T x)
         y = np.zeros_like(x)
-        y[n:] = x[:n]
+        y[n:] = x[:m - n]
         rc = self.K @ y
         scale = max(np.abs(r[:n]).max(), np.abs(rc[n:]).max())
         return bool(np.abs(r[n:]).max() > COUPLING_RTOL * scale)
@@ -143,7 +149,7 @@ class UncondensedSystem(DiscreteSystem):
         leading block of ``K_z^-1``)."""
         cache = self.__dict__
         if "_cond" not in cache:
-            m = 2 * self.n_nodes
+            m = self.K.m
             big = spla.LinearOperator((m, m), matvec=lambda x: self.K @ x, dtype=float)
             lmax = _sparse.extreme_eigenvalue(big, "LA", 1e-8) if m > 2 else float(
                 np.linalg.eigvalsh(self.K.toarray())[-1])
@@ -154,15 +160,19 @@ class UncondensedSystem(DiscreteSystem):
     def with_friction(self, friction) -> UncondensedSystem:
         """A copy with another friction; ``K_z`` and its factor are shared."""
         return UncondensedSystem(None, self.n_nodes, friction,
-                                 symmetry_rtol=self.symmetry_rtol, _stiffness=self.K)
+                                 symmetry_rtol=self.symmetry_rtol, dim=self.K.dim,
+                                 _stiffness=self.K)
 
     def subsystem(self, nodes) -> DiscreteSystem:
         """The (dense) system restricted to ``nodes``, the others held welded."""
         idx = np.asarray(nodes, dtype=int)
-        both = np.concatenate([idx, self.n_nodes + idx])
+        t = self.K.dim - 1
+        tang = (t * idx[:, None] + np.arange(t)).ravel()
+        both = np.concatenate([tang, self.K.nt + idx])
         Ks = self.K[np.ix_(both, both)]
-        k = idx.size
-        return DiscreteSystem(Ks[:k, :k], Ks[:k, k:], Ks[k:, k:], self.friction[idx])
+        k = tang.size
+        extra = {"dim": 3} if t == 2 else {}
+        return DiscreteSystem(Ks[:k, :k], Ks[:k, k:], Ks[k:, k:], self.friction[idx], **extra)
 
     def __repr__(self) -> str:
         f = self.friction
@@ -182,7 +192,7 @@ class UncondensedSystem(DiscreteSystem):
 def _check_condition(K: SchurStiffness, lu) -> None:
     """``cond_1(K) <= MAX_CONDITION`` for the condensed ``K`` (Higham's 1-norm estimates of ``K``
     by products and of ``K^-1``, the leading block of ``K_z^-1``, by solves with ``lu``)."""
-    m = 2 * K.n
+    m = K.m
     if m <= 2:
         cond = np.linalg.cond(K.toarray(), 1)
     else:

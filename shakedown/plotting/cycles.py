@@ -30,10 +30,10 @@ __all__ = [
 ]
 
 #: Display order (and colour index) of node-state labels; unknown labels are appended.
-STATE_ORDER = ("stick", "slip+", "forward", "slip-", "backward", "open", "separation")
+STATE_ORDER = ("stick", "slip+", "forward", "slip-", "backward", "slip", "open", "separation")
 _STATE_COLOURS = {
     "stick": "#d9d9d9", "slip+": "#d62728", "forward": "#d62728", "slip-": "#1f77b4",
-    "backward": "#1f77b4", "open": "#2ca02c", "separation": "#2ca02c",
+    "backward": "#1f77b4", "slip": "#d62728", "open": "#2ca02c", "separation": "#2ca02c",
 }
 
 
@@ -115,14 +115,14 @@ def plot_dissipation(run, ax=None, *, log: bool = False, relative: bool = False,
     return ax
 
 
-def _steady_frame(run):
+def _steady_frame(run, needs=("t", "node", "slip", "q", "p", "state")):
     table = getattr(run, "steady_table", run)
     if table is None or not hasattr(table, "columns"):
         raise InputError(
             "need a CycleRun / SteadyCycle with a steady_table, or that table (DataFrame with "
             f"columns t, node, slip, q, p, state); got {type(run).__name__}"
         )
-    missing = {"t", "node", "slip", "q", "p", "state"} - set(table.columns)
+    missing = set(needs) - set(table.columns)
     if missing:
         raise InputError(f"the steady table lacks columns {sorted(missing)}")
     if len(table) == 0:
@@ -195,7 +195,7 @@ def plot_node_states(run, ax=None):
     from matplotlib.colors import ListedColormap
     from matplotlib.patches import Patch
 
-    tab = _steady_frame(run)
+    tab = _steady_frame(run, ("t", "node", "state"))
     tab = tab.assign(state=tab["state"].astype(str))
     labels = [s for s in STATE_ORDER if s in set(tab["state"])]
     labels += sorted(set(tab["state"]) - set(labels))

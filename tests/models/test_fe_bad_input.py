@@ -79,7 +79,7 @@ def test_orthotropic_compliance_not_positive_definite():
 
 def test_bad_plane_element_pattern():
     with pytest.raises(InputError, match="plane must be 'strain' or 'stress'"):
-        fe.isotropic(1.0, 0.3, plane="3d")
+        fe.isotropic(1.0, 0.3, plane="axisymmetric")
     with pytest.raises(InputError, match="element must be one of"):
         fe.rectangle(1, 1, 2, 2, element="P3")
     with pytest.raises(InputError, match="pattern must be one of"):
@@ -118,7 +118,11 @@ def test_displacement_load_needs_dirichlet(mesh, mat):
 
 def test_bad_load_values(mesh, mat):
     with pytest.raises(InputError, match="Traction.value must be a finite pair"):
-        fe.Traction("top", (1, 2, 3))
+        fe.Traction("top", (1, 2, 3, 4))
+    with pytest.raises(InputError, match=r"Traction.value = \(1.0, 2.0, 3.0\) has 3 components "
+                                         "but the mesh is 2-D"):
+        fe.FEModel(mesh, mat, dirichlet=["top"], contact=["bottom"],
+                   loads={"a": fe.Traction("top", (1, 2, 3))})
     with pytest.raises(InputError, match="not one of Traction"):
         fe.FEModel(mesh, mat, dirichlet=["top"], contact=["bottom"], loads={"a": [3.0]})
 

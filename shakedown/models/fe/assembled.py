@@ -13,8 +13,6 @@ import scipy.sparse as sp
 from ...model.errors import InputError
 from .condensed import CondensedModel, factorize
 
-#: Memory budget [bytes] of the dense right-hand-side blocks ``K_ii^-1 K_ic[:, chunk]``.
-
 __all__ = ["Assembled"]
 
 
@@ -26,12 +24,46 @@ GUYAN_FULL_BYTES = 256 * 2**20
 
 
 
-def _sort_along(coords: np.ndarray, tangents: np.ndarray) -> np.ndarray:
-    """Order of boundary nodes along their mean tangent (counter-clockwise run)."""
+def _sort_along(coords: np.ndarray, normals: np.ndarray) -> np.ndarray:
+    """Order of boundary nodes: along their mean tangent (counter-clockwise run) in 2-D; in
+    3-D row by row of the mean tangent frame (``t_y`` first, then ``t_x``, coordinates
+    rounded to ``1e-9`` of the patch size so that rows of a grid stay rows)."""
+    if coords.shape[1] == 3:
+        tx, ty, _ = tangent_frames(normals.mean(axis=0)[None])
+        size = max(float(np.ptp(coords, axis=0).max()), np.finfo(float).tiny)
+        r = np.round(coords / (1e-9 * size))
+        return np.lexsort((r @ tx[0], r @ ty[0]))
+    tangents = np.c_[-normals[:, 1], normals[:, 0]]
     t = tangents.mean(axis=0)
     if np.linalg.norm(t) < 1e-12:
         t = tangents[0]
     return np.lexsort((coords @ np.array([-t[1], t[0]]), coords @ t))
+
+
+def tangent_frames(normals: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Orthonormal frames ``(t_x, t_y, n)`` of 3-D contact nodes from their outward normals.
+
+    ``n = -normal`` points from the obstacle into the body; ``t_x`` is the global ``x`` axis
+    projected on the tangent plane (the ``y`` axis where the normal is within ~25 degrees of
+    ``x``), ``t_y = n x t_x`` so that ``t_x x t_y = n`` (right-handed).  On a bottom face
+    (outward normal ``-z``): ``t_x = +x``, ``t_y = +y``, ``n = +z``.
+
+    Parameters
+    ----------
+    normals : ndarray, shape (N, 3)
+        Outward unit normals of the body.
+
+    Returns
+    -------
+    t_x, t_y, n : ndarray, each shape (N, 3)
+    """
+    n = -np.asarray(normals, dtype=float)
+    n = n / np.linalg.norm(n, axis=1)[:, None]
+    ref = np.where((np.abs(n[:, 0]) > 0.9)[:, None], [[0.0, 1.0, 0.0]], [[1.0, 0.0, 0.0]])
+    tx = ref - np.sum(ref * n, axis=1)[:, None] * n
+    tx /= np.linalg.norm(tx, axis=1)[:, None]
+    ty = np.cross(n, tx)
+    return tx, ty, n
 
 
 def _match(xa: np.ndarray, xb: np.ndarray, tol: float, what: str) -> np.ndarray:
@@ -60,6 +92,11 @@ class Assembled:
         t0 = time.perf_counter()
         self.model, self.with_mass = model, mass
         bodies = model.bodies
+        self.dim = dim = bodies[0].dim
+        for k, b in enumerate(bodies):
+            if b.dim != dim:
+                raise InputError(f"bodies[{k}] is {b.dim}-D but bodies[0] is {dim}-D: every body "
+                                 "of a model has the same dimension")
         self.offsets = np.cumsum([0] + [b.n_dofs for b in bodies])
         n_full = int(self.offsets[-1])
         diam = max(b.mesh.diameter for b in bodies)
@@ -79,7 +116,7 @@ class Assembled:
             shift = xs.mean(axis=0) - xm.mean(axis=0)
             idx = _match(xs - shift, xm, tol, f"periodic sides {m_!r} -> {s_!r} of body {k}")
             for s, m in zip(ns, nm[idx], strict=True):
-                for c in range(2):
+                for c in range(dim):
                     gs, gm = int(node_gdofs[k][s, c]), int(node_gdofs[k][m, c])
                     if gs not in held:
                         alias[gs] = gm
@@ -89,7 +126,7 @@ class Assembled:
         for k, name in model.contact:
             b = bodies[k]
             nn, nrm = b.node_normals(name)
-            order = _sort_along(b.node_coordinates[nn], np.c_[-nrm[:, 1], nrm[:, 0]])
+            order = _sort_along(b.node_coordinates[nn], nrm)
             for j in order:
                 g = node_gdofs[k][nn[j]]
                 if (k, nn[j]) in taken or any(int(x) in held or int(x) in alias for x in g):
@@ -102,7 +139,7 @@ class Assembled:
             mb = B.boundary_nodes(nb_)
             idx = _match(A.node_coordinates[nn], B.node_coordinates[mb], tol,
                          f"interface {na!r} (body {a}) / {nb_!r} (body {bb})")
-            order = _sort_along(A.node_coordinates[nn], np.c_[-nrm[:, 1], nrm[:, 0]])
+            order = _sort_along(A.node_coordinates[nn], nrm)
             for j in order:
                 g = node_gdofs[a][nn[j]]
                 if (a, nn[j]) in taken or any(int(x) in held or int(x) in alias for x in g):
@@ -117,36 +154,47 @@ class Assembled:
             )
         self.nodes = nodes
         self.N = N
+        self.nc = nc = dim * N  # contact unknowns: (dim - 1) N slips, then N gaps
         normals = np.array([nd[3] for nd in nodes])
-        tangents = np.c_[-normals[:, 1], normals[:, 0]]
-        self.normals, self.tangents = normals, tangents
+        self.normals = normals
+        if dim == 2:
+            tangents = np.c_[-normals[:, 1], normals[:, 0]]
+            # z columns of node j: its slip j, its gap N + j; coefficients t and -n
+            frame = [((j, N + j), np.stack([tangents[j], -normals[j]])) for j in range(N)]
+        else:
+            tx, ty, n_in = tangent_frames(normals)
+            tangents = np.stack([tx, ty], axis=1)  # (N, 2, 3)
+            frame = [((2 * j, 2 * j + 1, 2 * N + j), np.stack([tx[j], ty[j], n_in[j]]))
+                     for j in range(N)]
+        self.tangents = tangents
         self.coords = np.array([bodies[nd[1]].node_coordinates[nd[2]] for nd in nodes])
 
         # rows of the map u = P z + P_D u_D, as dicts {column: coef}; columns: z then held
         rows: dict[int, dict] = {}
-        frame_of = {}
-        for j, (_kind, k, node, nrm, _pb, _pn) in enumerate(nodes):
-            t = tangents[j]
-            for c in range(2):
-                frame_of[int(node_gdofs[k][node, c])] = (j, t[c], -nrm[c])
+        frame_of = {}  # dof -> {z column: coefficient} (u_c = sum of frame vectors' c-th parts)
+        for j, (_kind, k, node, _nrm, _pb, _pn) in enumerate(nodes):
+            cols, vecs = frame[j]
+            for c in range(dim):
+                frame_of[int(node_gdofs[k][node, c])] = {col: vecs[a, c] for a, col in
+                                                        enumerate(cols)}
         iface = {}
         for kind, k, node, _nrm, pb, pn in nodes:
             if kind == "interface":
-                for c in range(2):
+                for c in range(dim):
                     iface[int(node_gdofs[k][node, c])] = int(node_gdofs[pb][pn, c])
         held_list = sorted(held)
         self.held_list = held_list
-        held_col = {d: 2 * N + n_full + i for i, d in enumerate(held_list)}  # provisional
+        held_col = {d: nc + n_full + i for i, d in enumerate(held_list)}  # provisional
         n_int = 0
         int_col = {}
         for d in range(n_full):
             if d in held or d in alias or d in frame_of:
                 continue
-            int_col[d] = 2 * N + n_int
+            int_col[d] = nc + n_int
             n_int += 1
-        for d, (j, ct, cn) in frame_of.items():
+        for d, fr in frame_of.items():
             if d not in iface:
-                rows[d] = {j: ct, N + j: cn}
+                rows[d] = dict(fr)
         for d in held_list:
             rows[d] = {held_col[d]: 1.0}
         for d, col in int_col.items():
@@ -160,10 +208,9 @@ class Assembled:
             if d in alias:
                 r = dict(resolve(alias[d], depth + 1))
             elif d in iface:
-                j, ct, cn = frame_of[d]
                 r = dict(resolve(iface[d], depth + 1))
-                r[j] = r.get(j, 0.0) + ct
-                r[N + j] = r.get(N + j, 0.0) + cn
+                for col, coef in frame_of[d].items():
+                    r[col] = r.get(col, 0.0) + coef
             else:  # pragma: no cover - every dof is classified above
                 raise AssertionError(d)
             rows[d] = r
@@ -171,7 +218,7 @@ class Assembled:
 
         for d in range(n_full):
             resolve(d)
-        nz = 2 * N + n_int
+        nz = nc + n_int
         I, J, V = [], [], []
         for d, r in rows.items():
             for col, val in r.items():
@@ -181,7 +228,7 @@ class Assembled:
         I, J, V = np.array(I), np.array(J), np.array(V, dtype=float)
         # compact the held columns to nz .. nz + n_held - 1
         is_h = J >= nz
-        J[is_h] = nz + (J[is_h] - (2 * N + n_full))
+        J[is_h] = nz + (J[is_h] - (nc + n_full))
         P_all = sp.csr_matrix((V, (I, J)), shape=(n_full, nz + len(held_list)))
         self.P, self.P_D = P_all[:, :nz].tocsc(), P_all[:, nz:].tocsc()
         self.nz, self.n_int, self.n_full = nz, n_int, n_full
@@ -193,7 +240,7 @@ class Assembled:
                        if mass else None)
         self.t_assembly = time.perf_counter() - t0
         Kz = (self.P.T @ self.K_full @ self.P).tocsc()
-        c, i = slice(0, 2 * N), slice(2 * N, nz)
+        c, i = slice(0, nc), slice(nc, nz)
         self.Kz = Kz  # contact unknowns first, then the interior DOFs
         self.Kci, self.Kii = Kz[c, i].tocsc(), Kz[i, i].tocsc()
         if mass:
@@ -206,7 +253,7 @@ class Assembled:
     @property
     def Kcc(self) -> np.ndarray:
         """The contact block of ``K_z`` (dense)."""
-        return self.Kz[: 2 * self.N, : 2 * self.N].toarray()
+        return self.Kz[: self.nc, : self.nc].toarray()
 
     @property
     def lu(self):
@@ -252,8 +299,10 @@ class Assembled:
     # ------------------------------------------------------------------ products
     def guyan_mass(self):
         """``T^T M T`` with ``T = [I; -X]``, ``X = K_ii^-1 K_ic`` (blocked by memory budget)."""
-        N2 = 2 * self.N
+        N2 = self.nc
         Mg = np.array(self.Mcc, copy=True)
+        if self.n_int == 0:  # every node is a contact or held node: nothing to condense
+            return 0.5 * (Mg + Mg.T)
         Kic, Mic = self.Kci.T.tocsc(), self.Mci.T.tocsc()
         n_i = max(self.n_int, 1)
         if 8 * n_i * N2 <= GUYAN_FULL_BYTES:  # one pass: X in memory
@@ -288,10 +337,12 @@ class Assembled:
         """Welded reactions ``(q_w, p_w)`` of a load case (``solve``: ``K_ii^-1``, default the
         condensation's factor)."""
         g, _ = self.load_rhs(case)
-        gc, gi = g[: 2 * self.N], g[2 * self.N:]
+        gc, gi = g[: self.nc], g[self.nc:]
         solve = self.lu.solve if solve is None and self.n_int else solve
         r = -(gc - self.Kci @ solve(gi)) if self.n_int else -gc
-        return r[: self.N], r[self.N:]
+        nt = self.nc - self.N
+        q = r[:nt] if self.dim == 2 else r[:nt].reshape(self.N, 2)
+        return q, r[nt:]
 
     def condensed(self) -> CondensedModel:
         _ = self.lu  # factorized (timed) before the condensation
@@ -307,6 +358,7 @@ class Assembled:
             node_body=np.array([nd[1] for nd in self.nodes]),
             node_index=np.array([nd[2] for nd in self.nodes]),
             node_kind=tuple(nd[0] for nd in self.nodes), welded=welded, from_cache=False,
+            dim=self.dim,
             timings={"assembly": self.t_assembly, "factorization": self.t_factor,
                      "condensation": t_cond},
             counts={"n_full_dofs": self.n_full, "n_interior_dofs": self.n_int,
@@ -318,7 +370,7 @@ class Assembled:
     # ------------------------------------------------------------------ recovery
     def displacements(self, zc: np.ndarray, case: str | None, solve=None):
         g, uD = self.load_rhs(case) if case is not None else (np.zeros(self.nz), None)
-        gi = g[2 * self.N:]
+        gi = g[self.nc:]
         solve = self.lu.solve if solve is None and self.n_int else solve
         zi = solve(gi - self.Kci.T @ zc) if self.n_int else np.zeros(0)
         u = self.P @ np.concatenate([zc, zi])

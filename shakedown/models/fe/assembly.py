@@ -1,7 +1,8 @@
 """Bodies, loads and their assembly with scikit-fem (stiffness, consistent mass, load vectors).
 
-A *node* is a location carrying two displacement DOFs ``(u_x, u_y)``: the mesh vertices,
-then (``P2``) one node per facet at its mid-point.
+A *node* is a location carrying ``dim`` displacement DOFs ``(u_x, u_y[, u_z])``: the mesh
+vertices, then (quadratic elements) one node per edge (3-D) or facet (2-D) at its mid-point.
+Loads and prescribed displacements have ``dim`` components (a pair in 2-D, a triple in 3-D).
 """
 
 from __future__ import annotations
@@ -12,134 +13,43 @@ from functools import cached_property
 import numpy as np
 
 from ...model.errors import InputError
+from .assembly3d import _facet_normals_3d, _voigt_stiffness
+from .loads import (  # noqa: F401 - re-exported: the loads' historical home
+    LOAD_TYPES,
+    BodyForce,
+    Displacement,
+    Pressure,
+    Traction,
+    load_key,
+    normalize_loads,
+)
 from .materials import Material
 from .meshes import FEMesh
-
-# --------------------------------------------------------------------------- loads
-
-
-def _pair(name: str, value) -> tuple[float, float] | object:
-    if callable(value):
-        return value
-    try:
-        v = np.array(value, dtype=float).reshape(-1)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"{name} must be a pair (x, y) of numbers; got {value!r}") from exc
-    if v.shape != (2,) or not np.all(np.isfinite(v)):
-        raise InputError(f"{name} must be a finite pair (x, y); got {value!r}")
-    return (float(v[0]), float(v[1]))
-
-
-@dataclass(frozen=True)
-class Traction:
-    """Surface traction on a named boundary [force / length^2 x thickness = force / length].
-
-    ``value``: ``(t_x, t_y)`` in the global frame, or a callable ``f(x) -> (2, ...)`` of the
-    points ``x`` (shape (2, ...)); callables make the model uncacheable.
-    """
-
-    boundary: str
-    value: object
-
-    def __post_init__(self):
-        object.__setattr__(self, "value", _pair("Traction.value", self.value))
-
-
-@dataclass(frozen=True)
-class Pressure:
-    """Normal pressure on a named boundary (positive = pushing into the body, along ``-n``)."""
-
-    boundary: str
-    value: float
-
-    def __post_init__(self):
-        if not callable(self.value):
-            v = float(self.value)
-            if not np.isfinite(v):
-                raise InputError(f"Pressure.value must be finite; got {self.value!r}")
-            object.__setattr__(self, "value", v)
-
-
-@dataclass(frozen=True)
-class BodyForce:
-    """Body force per unit volume ``(b_x, b_y)`` [force / length^3], or a callable of ``x``."""
-
-    value: object
-    body: int | None = None  # None: every body
-
-    def __post_init__(self):
-        object.__setattr__(self, "value", _pair("BodyForce.value", self.value))
-
-
-@dataclass(frozen=True)
-class Displacement:
-    """Prescribed displacement ``(u_x, u_y)`` on a named *Dirichlet* boundary [length]."""
-
-    boundary: str
-    value: object
-
-    def __post_init__(self):
-        object.__setattr__(self, "value", _pair("Displacement.value", self.value))
-
-
-LOAD_TYPES = (Traction, Pressure, BodyForce, Displacement)
-
-
-def normalize_loads(loads) -> dict[str, tuple]:
-    """``None`` | load | list of loads | dict name -> load(s)  ->  dict name -> tuple of loads."""
-    if loads is None:
-        return {}
-    if isinstance(loads, LOAD_TYPES):
-        loads = {"load": [loads]}
-    elif isinstance(loads, (list, tuple)):
-        loads = {"load": list(loads)}
-    if not isinstance(loads, dict):
-        raise InputError(
-            f"loads must be a load, a list of loads or a dict name -> load(s); got {loads!r}"
-        )
-    out = {}
-    for name, case in loads.items():
-        items = [case] if isinstance(case, LOAD_TYPES) else list(case)
-        for it in items:
-            if not isinstance(it, LOAD_TYPES):
-                raise InputError(
-                    f"load case {name!r}: {it!r} is not one of Traction, Pressure, BodyForce, "
-                    "Displacement"
-                )
-        out[str(name)] = tuple(items)
-    return out
-
-
-def load_key(load) -> dict:
-    """JSON-able description of a load; raises if it holds a callable (not cacheable)."""
-    d = {"type": type(load).__name__}
-    for k, v in load.__dict__.items():
-        if callable(v):
-            raise TypeError("callable load")
-        d[k] = v
-    return d
-
 
 # --------------------------------------------------------------------------- bodies
 
 
-def _parse_dirichlet(dirichlet) -> dict[str, tuple[int, ...]]:
-    """``["top"]`` or ``{"top": "xy", "left": "x"}`` -> name -> components."""
+def _parse_dirichlet(dirichlet, dim: int = 2) -> dict[str, tuple[int, ...]]:
+    """``["top"]`` or ``{"top": "xy", "left": "x"}`` -> name -> components (all by default)."""
     if dirichlet is None:
         return {}
     if isinstance(dirichlet, str):
         dirichlet = [dirichlet]
+    axes = "xyz"[:dim]
     if isinstance(dirichlet, dict):
         items = dirichlet.items()
     else:
-        items = [(name, "xy") for name in dirichlet]
+        items = [(name, axes) for name in dirichlet]
     out = {}
     for name, comp in items:
-        if comp not in ("x", "y", "xy"):
+        if not (isinstance(comp, str) and comp and set(comp) <= set(axes)
+                and len(set(comp)) == len(comp)):
+            allowed = "'x', 'y' or 'xy'" if dim == 2 else "'x', 'y', 'z' or a combination " \
+                "such as 'xz' or 'xyz'"
             raise InputError(
-                f"dirichlet[{name!r}] must be 'x', 'y' or 'xy' (held components); got {comp!r}"
+                f"dirichlet[{name!r}] must be {allowed} (held components); got {comp!r}"
             )
-        out[str(name)] = tuple(i for i, c in enumerate("xy") if c in comp)
+        out[str(name)] = tuple(i for i, c in enumerate(axes) if c in comp)
     return out
 
 
@@ -152,12 +62,14 @@ class Body:
     mesh : FEMesh
     material : Material
     dirichlet : list of str or dict, optional
-        Held boundaries: ``["top"]`` (both components) or ``{"left": "x"}`` (rollers).
-        Prescribed non-zero values come from :class:`Displacement` loads.
+        Held boundaries: ``["top"]`` (every component) or ``{"left": "x"}`` (rollers; in 3-D
+        also e.g. ``"z"`` or ``"xz"``).  Prescribed non-zero values come from
+        :class:`Displacement` loads.
     loads : dict name -> load(s), optional
-        Load cases (see :func:`normalize_loads`).
+        Load cases (see :func:`normalize_loads`), with vectors of ``mesh.dim`` components.
     thickness : float
-        Out-of-plane thickness (forces are per this thickness; 1 = per unit thickness).
+        Out-of-plane thickness (forces are per this thickness; 1 = per unit thickness); 2-D
+        only (must stay 1 on a 3-D mesh).
     """
 
     mesh: FEMesh
@@ -176,7 +88,16 @@ class Body:
             )
         if not (np.isfinite(self.thickness) and self.thickness > 0):
             raise InputError(f"thickness must be > 0; got {self.thickness!r}")
-        held = _parse_dirichlet(self.dirichlet)
+        dim = self.mesh.dim
+        if self.material.dim != dim:
+            raise InputError(
+                f"material is {self.material.dim}-D (plane = {self.material.plane!r}) but the mesh "
+                f"is {dim}-D: use fe.isotropic(..., plane='3d') on a 3-D mesh and plane='strain' "
+                "or 'stress' on a 2-D mesh")
+        if dim == 3 and self.thickness != 1.0:
+            raise InputError(f"thickness = {self.thickness!r} applies to 2-D bodies only; a 3-D "
+                             "body has its own depth: leave thickness = 1")
+        held = _parse_dirichlet(self.dirichlet, dim)
         for name in held:
             self.mesh.facets(name)  # raises on unknown / empty names
         object.__setattr__(self, "_held", held)
@@ -186,6 +107,11 @@ class Body:
                 b = getattr(it, "boundary", None)
                 if b is not None:
                     self.mesh.facets(b)
+                v = getattr(it, "value", None)
+                if isinstance(v, tuple) and len(v) != dim:
+                    raise InputError(
+                        f"load case {case!r}: {type(it).__name__}.value = {v} has {len(v)} "
+                        f"components but the mesh is {dim}-D; give {dim} components")
                 if isinstance(it, Displacement) and b not in held:
                     raise InputError(
                         f"load case {case!r}: Displacement on {b!r}, which is not a Dirichlet "
@@ -193,20 +119,33 @@ class Body:
                     )
 
     # ------------------------------------------------------------------ discretisation
+    @property
+    def dim(self) -> int:
+        """Space dimension of the body (2 or 3)."""
+        return self.mesh.dim
+
     @cached_property
     def basis(self):
-        from skfem import Basis, ElementQuad1, ElementTriP1, ElementTriP2, ElementVector
+        import skfem
 
-        e = {"P1": ElementTriP1, "P2": ElementTriP2, "Q1": ElementQuad1}[self.mesh.element]()
-        return Basis(self.mesh.mesh, ElementVector(e))
+        names = ({"P1": "ElementTriP1", "P2": "ElementTriP2", "Q1": "ElementQuad1"}
+                 if self.dim == 2 else
+                 {"P1": "ElementTetP1", "P2": "ElementTetP2", "Q1": "ElementHex1"})
+        e = getattr(skfem, names[self.mesh.element])()
+        if self.dim == 3 and self.mesh.element == "Q1":
+            # 2 x 2 x 2 Gauss points (exact stiffness and mass of parallelepipeds; the usual full
+            # integration of trilinear hexahedra) instead of scikit-fem's default 4 x 4 x 4
+            return skfem.Basis(self.mesh.mesh, skfem.ElementVector(e), intorder=3)
+        return skfem.Basis(self.mesh.mesh, skfem.ElementVector(e))
 
     @cached_property
     def node_dofs(self) -> np.ndarray:
-        """DOF numbers ``(u_x, u_y)`` of every node, shape (n_nodes, 2)."""
+        """DOF numbers ``(u_x, u_y[, u_z])`` of every node, shape (n_nodes, dim)."""
         b = self.basis
         parts = [b.nodal_dofs.T]
-        if b.facet_dofs.size:
-            parts.append(b.facet_dofs.T)
+        for extra in (b.edge_dofs, b.facet_dofs):
+            if extra.size:
+                parts.append(extra.T)
         nd = np.vstack(parts).astype(np.int64)
         if nd.size != b.N:
             raise InputError(f"unsupported element layout ({b.N} DOFs, {nd.size} nodal)")
@@ -218,23 +157,35 @@ class Body:
 
     @cached_property
     def node_coordinates(self) -> np.ndarray:
-        """Coordinates of every node, shape (n_nodes, 2)."""
+        """Coordinates of every node, shape (n_nodes, dim)."""
         return self.basis.doflocs[:, self.node_dofs[:, 0]].T.copy()
 
-    def facet_nodes(self, facets: np.ndarray) -> np.ndarray:
-        """Nodes on the given facets (vertices, plus mid-side nodes for ``P2``), sorted."""
+    def _facet_node_lists(self, facets: np.ndarray) -> list[np.ndarray]:
+        """Per node slot of a facet, the node numbers over ``facets``: the vertices, then the
+        mid-edge nodes (``P2`` in 3-D) or the mid-side nodes (``P2`` in 2-D)."""
         m = self.mesh.mesh
-        nodes = [m.facets[:, facets].ravel()]
-        if self.basis.facet_dofs.size:
-            nodes.append(m.p.shape[1] + np.asarray(facets))
-        return np.unique(np.concatenate(nodes))
+        facets = np.asarray(facets)
+        slots = list(m.facets[:, facets])
+        if self.basis.edge_dofs.size:
+            slots += list(m.p.shape[1] + m.f2e[:, facets])
+        elif self.basis.facet_dofs.size:
+            slots.append(m.p.shape[1] + facets)
+        return slots
+
+    def facet_nodes(self, facets: np.ndarray) -> np.ndarray:
+        """Nodes on the given facets (vertices, plus mid-side / mid-edge nodes for ``P2``),
+        sorted."""
+        return np.unique(np.concatenate(self._facet_node_lists(facets)))
 
     def boundary_nodes(self, name: str) -> np.ndarray:
         return self.facet_nodes(self.mesh.facets(name))
 
     def facet_normals(self, facets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Outward unit normals (n_f, 2) and lengths (n_f,) of boundary facets."""
+        """Outward unit normals (n_f, dim) and sizes (n_f,) of boundary facets (lengths in 2-D,
+        areas in 3-D; the normal at the facet's centre)."""
         m = self.mesh.mesh
+        if self.dim == 3:
+            return _facet_normals_3d(m, np.asarray(facets))
         a, b = m.p[:, m.facets[0, facets]], m.p[:, m.facets[1, facets]]
         d = b - a
         L = np.hypot(d[0], d[1])
@@ -245,20 +196,17 @@ class Body:
         return n.T, L
 
     def node_normals(self, name: str) -> tuple[np.ndarray, np.ndarray]:
-        """Nodes of boundary ``name`` and their outward unit normals (n, 2).
+        """Nodes of boundary ``name`` and their outward unit normals (n, dim).
 
-        A node's normal is the length-weighted mean of the outward normals of the facets of
-        ``name`` that touch it (the facet's own normal on straight sides).
+        A node's normal is the length- (area-) weighted mean of the outward normals of the
+        facets of ``name`` that touch it (the facet's own normal on plane faces).
         """
         facets = self.mesh.facets(name)
         nodes = self.facet_nodes(facets)
         fn, L = self.facet_normals(facets)
-        m = self.mesh.mesh
-        acc = np.zeros((self.node_dofs.shape[0], 2))
-        for k in range(m.facets.shape[0]):
-            np.add.at(acc, m.facets[k, facets], fn * L[:, None])
-        if self.basis.facet_dofs.size:
-            acc[m.p.shape[1] + facets] += fn * L[:, None]
+        acc = np.zeros((self.node_dofs.shape[0], self.dim))
+        for slot in self._facet_node_lists(facets):
+            np.add.at(acc, slot, fn * L[:, None])
         n = acc[nodes]
         n /= np.linalg.norm(n, axis=1)[:, None]
         return nodes, n
@@ -283,16 +231,23 @@ class Body:
         from skfem.helpers import sym_grad
 
         D = self.material.D * self.thickness
+        pairs = ((0, 0), (1, 1), (0, 1)) if self.dim == 2 else \
+            ((0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1))  # Voigt order, engineering shear
+        nv = len(pairs)
 
         @BilinearForm
         def form(u, v, w):
             e, f = sym_grad(u), sym_grad(v)
-            eu = (e[0, 0], e[1, 1], 2 * e[0, 1])
-            ev = (f[0, 0], f[1, 1], 2 * f[0, 1])
-            return sum(D[i, j] * eu[j] * ev[i] for i in range(3) for j in range(3))
+            eu = [e[i, j] * (1 if i == j else 2) for i, j in pairs]
+            ev = [f[i, j] * (1 if i == j else 2) for i, j in pairs]
+            return sum(D[i, j] * eu[j] * ev[i] for i in range(nv) for j in range(nv)
+                       if D[i, j] != 0.0)
 
         with np.errstate(over="ignore", invalid="ignore"):  # reported below, in words
-            K = asm(form, self.basis).tocsr()
+            if self.dim == 3:  # the same integrals, vectorised over the local basis pairs
+                K = _voigt_stiffness(self.basis, D, pairs)
+            else:
+                K = asm(form, self.basis).tocsr()
         if not np.all(np.isfinite(K.data)):
             raise InputError(
                 f"the stiffness matrix overflows (material D up to {np.abs(D).max():.3g}, "
@@ -326,7 +281,7 @@ class Body:
                 @LinearForm
                 def body(v, w, val=val):
                     b = val(w.x) if callable(val) else val
-                    return self.thickness * (b[0] * v[0] + b[1] * v[1])
+                    return self.thickness * sum(b[i] * v[i] for i in range(self.dim))
 
                 f += asm(body, self.basis)
             elif isinstance(it, (Traction, Pressure)):
@@ -338,15 +293,15 @@ class Body:
                 def surf(v, w, val=val, is_p=is_p):
                     t = val(w.x) if callable(val) else val
                     if is_p:
-                        t = (-t * w.n[0], -t * w.n[1])
-                    return self.thickness * (t[0] * v[0] + t[1] * v[1])
+                        t = [-t * w.n[i] for i in range(self.dim)]
+                    return self.thickness * sum(t[i] * v[i] for i in range(self.dim))
 
                 f += asm(surf, fb)
             elif isinstance(it, Displacement):
                 nodes = self.boundary_nodes(it.boundary)
                 xy = self.node_coordinates[nodes].T
                 val = np.asarray(it.value(xy) if callable(it.value) else it.value, float)
-                val = np.broadcast_to(val.reshape(2, -1), (2, nodes.size))
+                val = np.broadcast_to(val.reshape(self.dim, -1), (self.dim, nodes.size))
                 for c in self._held[it.boundary]:
                     for node, u in zip(nodes, val[c], strict=True):
                         prescribed[int(self.node_dofs[node, c])] = float(u)

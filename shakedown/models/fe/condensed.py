@@ -125,25 +125,32 @@ class CondensedModel:
     Attributes
     ----------
     model : FEModel
-    K : ndarray, shape (2N, 2N)
-        Condensed stiffness in the order ``(v_1..v_N, w_1..w_N)`` [force / length]:
-        ``K = [[A, B], [B^T, C]]`` of MODEL.md s.1 (``== system.K``).
-    M : ndarray, shape (2N, 2N) or None
+    K : ndarray, shape (2N, 2N) (2-D) or (3N, 3N) (3-D)
+        Condensed stiffness in the order ``(v_1..v_N, w_1..w_N)`` (2-D) or
+        ``(v_1x, v_1y, ..., v_Nx, v_Ny, w_1, ..., w_N)`` (3-D) [force / length]:
+        ``K = [[A, B], [B^T, C]]`` of MODEL.md s.1 / s.8 (``== system.K``).
+    M : ndarray, same shape as ``K``, or None
         Guyan-condensed consistent mass (only with ``condense(mass=True)``) [mass].
-    node_coordinates, normals, tangents : ndarray, shape (N, 2)
-        Contact node positions, outward unit normals ``n`` and tangents ``t = (-n_y, n_x)``.
+    node_coordinates, normals : ndarray, shape (N, dim)
+        Contact node positions and outward unit normals of the body.
+    tangents : ndarray, shape (N, 2) (2-D) or (N, 2, 3) (3-D)
+        2-D: the tangent ``t = (-n_y, n_x)``; 3-D: the rows ``t_x``, ``t_y`` of the node's
+        frame ``(t_x, t_y, -normal)`` (:func:`~shakedown.fe.assembled.tangent_frames`).
     node_body, node_index : ndarray, shape (N,)
         Body and node number (in :attr:`Body.node_coordinates`) of each contact node.
     node_kind : tuple of str
         ``"contact"`` (rigid obstacle) or ``"interface"`` per node.
     welded : dict
-        Load case -> ``(q_w, p_w)`` (each shape (N,)): welded reactions [force].
+        Load case -> ``(q_w, p_w)``: welded reactions [force], ``q_w`` shape (N,) (2-D) or
+        (N, 2) (3-D, components along ``t_x``, ``t_y``), ``p_w`` shape (N,).
     from_cache : bool
         ``True`` when read from the on-disk cache (no assembly, no factorization).
     timings : dict
         Seconds spent in ``assembly``, ``factorization``, ``condensation`` (0 from cache).
     counts : dict
         ``n_full_dofs``, ``n_interior_dofs``, ``n_contact_nodes``, ``nnz_K_ii``.
+    dim : int
+        2 or 3.
     """
 
     model: object  # FEModel
@@ -159,6 +166,7 @@ class CondensedModel:
     from_cache: bool
     timings: dict
     counts: dict
+    dim: int = 2
     _lazy: dict = field(default_factory=dict, repr=False)
 
     def __post_init__(self):
@@ -168,27 +176,35 @@ class CondensedModel:
 
     @property
     def n_nodes(self) -> int:
-        return self.K.shape[0] // 2
+        return self.K.shape[0] // self.dim
+
+    @property
+    def _nt(self) -> int:
+        """Number of tangential unknowns, ``(dim - 1) N``."""
+        return (self.dim - 1) * self.n_nodes
 
     @property
     def A(self) -> np.ndarray:
-        return self.K[: self.n_nodes, : self.n_nodes]
+        return self.K[: self._nt, : self._nt]
 
     @property
     def B(self) -> np.ndarray:
-        return self.K[: self.n_nodes, self.n_nodes:]
+        return self.K[: self._nt, self._nt:]
 
     @property
     def C(self) -> np.ndarray:
-        return self.K[self.n_nodes:, self.n_nodes:]
+        return self.K[self._nt:, self._nt:]
 
     @property
     def system(self):
-        """:class:`shakedown.DiscreteSystem` with the model's friction (default 0)."""
+        """:class:`shakedown.DiscreteSystem` with the model's friction (default 0); ``dim = 3``
+        for a 3-D model."""
         if "system" not in self._lazy:
             from ...model.system import DiscreteSystem
 
-            self._lazy["system"] = DiscreteSystem(self.A, self.B, self.C, self.model.friction)
+            extra = {"dim": 3} if self.dim == 3 else {}
+            self._lazy["system"] = DiscreteSystem(self.A, self.B, self.C, self.model.friction,
+                                                  **extra)
         return self._lazy["system"]
 
     def with_friction(self, friction):
@@ -203,7 +219,7 @@ class CondensedModel:
     # ------------------------------------------------------------------ loads
     def _combine(self, combo, what) -> tuple[np.ndarray, np.ndarray]:
         N = self.n_nodes
-        q, p = np.zeros(N), np.zeros(N)
+        q, p = np.zeros(N if self.dim == 2 else (N, 2)), np.zeros(N)
         if combo is None:
             return q, p
         if isinstance(combo, str):
@@ -220,7 +236,8 @@ class CondensedModel:
         return q, p
 
     def welded_reactions(self, combo) -> tuple[np.ndarray, np.ndarray]:
-        """``(q_w, p_w)`` of a load case or a combination ``{case: factor}`` [force]."""
+        """``(q_w, p_w)`` of a load case or a combination ``{case: factor}`` [force]; ``q_w`` of
+        shape (N,) in 2-D, (N, 2) in 3-D."""
         return self._combine(combo, "combo")
 
     def load_cycle(self, static=None, cyclic=None, cyclic_sin=None, samples=None):
@@ -235,6 +252,11 @@ class CondensedModel:
         samples : list of (str or dict), optional
             Instead of harmonics: ``r_1`` sampled at ``t = k / len(samples)`` (piecewise
             linear), each sample a load combination.
+
+        Returns
+        -------
+        LoadCycle
+            2-D: ``q0`` shape (N,); 3-D: ``q0`` shape (N, 2) (``load.dim == 3``).
         """
         from ...model.loading import LoadCycle
 
@@ -274,7 +296,8 @@ class CondensedModel:
 
         Parameters
         ----------
-        slip, gap : array_like, shape (N,), optional (default 0)
+        slip : array_like, shape (N,) (2-D) or (N, 2) (3-D), optional (default 0)
+        gap : array_like, shape (N,), optional (default 0)
         load : str, optional
             Load case (external loads and prescribed displacements); None = unloaded.
 
@@ -284,7 +307,8 @@ class CondensedModel:
             One DOF vector per body (scikit-fem numbering of ``body.basis``).
         """
         N = self.n_nodes
-        v = np.zeros(N) if slip is None else np.asarray(slip, float).reshape(N)
+        nt = self._nt
+        v = np.zeros(nt) if slip is None else np.asarray(slip, float).reshape(nt)
         w = np.zeros(N) if gap is None else np.asarray(gap, float).reshape(N)
         if load is not None and load not in self.welded:
             raise InputError(f"unknown load case {load!r}; the model has {sorted(self.welded)}")
@@ -320,7 +344,8 @@ class CondensedModel:
             "tangents": self.tangents, "node_body": self.node_body,
             "node_index": self.node_index, "node_kind": np.array(self.node_kind, dtype="U16"),
             "cases": np.array(cases, dtype="U200"),
-            "q_w": np.array([self.welded[c][0] for c in cases]).reshape(len(cases), self.n_nodes),
+            "q_w": np.array([self.welded[c][0] for c in cases]).reshape(
+                (len(cases), self.n_nodes) + (() if self.dim == 2 else (2,))),
             "p_w": np.array([self.welded[c][1] for c in cases]).reshape(len(cases), self.n_nodes),
             "counts": np.array([self.counts[k] for k in _COUNT_KEYS]),
         }
@@ -339,6 +364,7 @@ class CondensedModel:
             from_cache=True, timings={"assembly": 0.0, "factorization": 0.0,
                                       "condensation": 0.0},
             counts=dict(zip(_COUNT_KEYS, (int(x) for x in a["counts"]), strict=True)),
+            dim=int(a["coords"].shape[1]),
         )
 
     def __repr__(self) -> str:

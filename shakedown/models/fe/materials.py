@@ -1,9 +1,11 @@
-"""Linear elastic materials for 2-D (plane strain / plane stress) FE models.
+"""Linear elastic materials for 2-D (plane strain / plane stress) and 3-D FE models.
 
 The in-plane stiffness ``D`` maps the engineering strain ``(eps_xx, eps_yy, gamma_xy)``
 (``gamma_xy = 2 eps_xy``) to the stress ``(sig_xx, sig_yy, sig_xy)``, i.e. Voigt order
-``(xx, yy, xy)``.  In the notation of seed ``001`` (Agwa & Pinto da Costa 2007),
-``D44 = C_xyxy = D[2, 2]`` and ``D24 = C_yyxy = D[1, 2]`` (y = contact normal).
+``(xx, yy, xy)``.  A 3-D material (``plane="3d"``) has the full ``6 x 6`` stiffness in Voigt
+order ``(xx, yy, zz, yz, xz, xy)`` with engineering shear strains.  In the notation of seed
+``001`` (Agwa & Pinto da Costa 2007), ``D44 = C_xyxy = D[2, 2]`` and ``D24 = C_yyxy = D[1, 2]``
+(y = contact normal; ``D[5, 5]`` and ``D[1, 5]`` of a 3-D material).
 """
 
 from __future__ import annotations
@@ -14,22 +16,25 @@ import numpy as np
 
 from ...model.errors import InputError
 
-_PLANES = ("strain", "stress")
+_PLANES = ("strain", "stress", "3d")
 _VOIGT = {(0, 0): 0, (1, 1): 1, (0, 1): 2, (1, 0): 2}
+_VOIGT3 = {(0, 0): 0, (1, 1): 1, (2, 2): 2, (1, 2): 3, (2, 1): 3, (0, 2): 4, (2, 0): 4,
+           (0, 1): 5, (1, 0): 5}
 
 
 @dataclass(frozen=True, eq=False)
 class Material:
-    """A homogeneous linear elastic material in 2-D.
+    """A homogeneous linear elastic material in 2-D or 3-D.
 
     Attributes
     ----------
-    D : ndarray, shape (3, 3)
+    D : ndarray, shape (3, 3) or (6, 6)
         In-plane stiffness in Voigt order ``(xx, yy, xy)`` with engineering shear strain
-        [stress].  Symmetric positive definite.
+        [stress] (2-D), or the 3-D stiffness in Voigt order ``(xx, yy, zz, yz, xz, xy)``
+        (``plane="3d"``).  Symmetric positive definite.
     density : float
         Mass density [mass / volume]; used for the consistent mass matrix.
-    plane : {"strain", "stress"}
+    plane : {"strain", "stress", "3d"}
     name : str
         ``"isotropic"`` or ``"transversely_isotropic"``.
     parameters : dict
@@ -44,8 +49,10 @@ class Material:
 
     def __post_init__(self):
         D = np.array(self.D, dtype=float)
-        if D.shape != (3, 3) or not np.all(np.isfinite(D)):
-            raise InputError(f"D must be a finite (3, 3) array; got shape {D.shape}")
+        size = 6 if self.plane == "3d" else 3
+        if D.shape != (size, size) or not np.all(np.isfinite(D)):
+            raise InputError(f"D must be a finite ({size}, {size}) array for plane = "
+                             f"{self.plane!r}; got shape {D.shape}")
         if np.abs(D - D.T).max() > 1e-12 * np.abs(D).max():
             raise InputError("D must be symmetric")
         scale = np.abs(D).max()
@@ -63,14 +70,19 @@ class Material:
         object.__setattr__(self, "D", D)
 
     @property
+    def dim(self) -> int:
+        """Space dimension of the material: 3 for ``plane="3d"``, else 2."""
+        return 3 if self.plane == "3d" else 2
+
+    @property
     def D44(self) -> float:
         """``C_xyxy`` (shear stiffness in the x-y frame), seed 001 notation."""
-        return float(self.D[2, 2])
+        return float(self.D[5, 5] if self.dim == 3 else self.D[2, 2])
 
     @property
     def D24(self) -> float:
         """``C_yyxy`` (normal stress on y-faces per unit shear strain), seed 001 notation."""
-        return float(self.D[1, 2])
+        return float(self.D[1, 5] if self.dim == 3 else self.D[1, 2])
 
     def layer_critical_friction(self) -> float:
         """``D44 / |D24|``: critical friction of the infinite layer (seed 001, s.3).
@@ -98,7 +110,8 @@ class Material:
 
 def _check_plane(plane: str) -> str:
     if plane not in _PLANES:
-        raise InputError(f"plane must be 'strain' or 'stress'; got {plane!r}")
+        raise InputError(f"plane must be 'strain' or 'stress' (2-D) or '3d' (3-D bodies); got "
+                         f"{plane!r}")
     return plane
 
 
@@ -113,7 +126,10 @@ def _positive(name: str, value) -> float:
 
 
 def _in_plane(C6: np.ndarray, plane: str) -> np.ndarray:
-    """3x3 in-plane stiffness (11, 22, 12) from the 6x6 Voigt stiffness (11,22,33,23,13,12)."""
+    """3x3 in-plane stiffness (11, 22, 12) from the 6x6 Voigt stiffness (11,22,33,23,13,12);
+    the 6x6 itself for ``plane="3d"``."""
+    if plane == "3d":
+        return C6
     idx = [0, 1, 5]
     if plane == "strain":
         return C6[np.ix_(idx, idx)]
@@ -122,19 +138,23 @@ def _in_plane(C6: np.ndarray, plane: str) -> np.ndarray:
 
 
 def rotate_voigt(D: np.ndarray, theta: float) -> np.ndarray:
-    """In-plane stiffness of a material whose axes are turned by ``theta`` [rad] from x, y.
+    """Stiffness of a material whose axes are turned by ``theta`` [rad] about z from x, y.
 
-    ``D`` is given in the material axes ``(p1, p2)``; ``p1 = (cos theta, sin theta)``.  The
-    fourth-order tensor is rotated, ``C'_ijkl = R_ia R_jb R_kc R_ld C_abcd``.
+    ``D`` is given in the material axes ``(p1, p2[, e3])``; ``p1 = (cos theta, sin theta)``:
+    in-plane ``(3, 3)`` (Voigt ``(xx, yy, xy)``) or 3-D ``(6, 6)`` (Voigt ``(xx, yy, zz, yz,
+    xz, xy)``).  The fourth-order tensor is rotated, ``C'_ijkl = R_ia R_jb R_kc R_ld C_abcd``.
     """
-    T = np.zeros((2, 2, 2, 2))
-    for (i, j), a in _VOIGT.items():
-        for (k, l), b in _VOIGT.items():
+    D = np.asarray(D, dtype=float)
+    voigt, d = (_VOIGT, 2) if D.shape == (3, 3) else (_VOIGT3, 3)
+    T = np.zeros((d,) * 4)
+    for (i, j), a in voigt.items():
+        for (k, l), b in voigt.items():
             T[i, j, k, l] = D[a, b]
     c, s = np.cos(theta), np.sin(theta)
-    R = np.array([[c, -s], [s, c]])
+    R = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])[:d, :d]
     T = np.einsum("ia,jb,kc,ld,abcd->ijkl", R, R, R, R, T)
-    pairs = [(0, 0), (1, 1), (0, 1)]
+    pairs = [(0, 0), (1, 1), (0, 1)] if d == 2 else [(0, 0), (1, 1), (2, 2), (1, 2), (0, 2),
+                                                      (0, 1)]
     return np.array([[T[i, j, k, l] for (k, l) in pairs] for (i, j) in pairs])
 
 
@@ -147,7 +167,8 @@ def isotropic(E: float, nu: float, plane: str = "strain", density: float = 1.0) 
         Young's modulus [stress], ``> 0``.
     nu : float
         Poisson ratio, ``-1 < nu < 0.5``.
-    plane : {"strain", "stress"}
+    plane : {"strain", "stress", "3d"}
+        Plane strain or plane stress (2-D bodies), or ``"3d"`` for 3-D bodies (``6 x 6``).
     density : float
         Mass density [mass / volume].
 
@@ -168,7 +189,11 @@ def isotropic(E: float, nu: float, plane: str = "strain", density: float = 1.0) 
         raise InputError(
             f"nu must satisfy -1 < nu < 0.5 (positive definite elasticity); got nu = {nu}"
         )
-    if plane == "strain":
+    if plane == "3d":
+        lam, mu = E * nu / ((1 + nu) * (1 - 2 * nu)), E / (2 * (1 + nu))
+        D = np.diag([2 * mu] * 3 + [mu] * 3)
+        D[:3, :3] += lam
+    elif plane == "strain":
         f = E / ((1 + nu) * (1 - 2 * nu))
         D = f * np.array([[1 - nu, nu, 0], [nu, 1 - nu, 0], [0, 0, (1 - 2 * nu) / 2]])
     else:
@@ -204,8 +229,8 @@ def transversely_isotropic(
     G12 : float
         Shear modulus in the ``p1``-``p2`` plane [stress].
     theta : float
-        Angle of ``p1`` from the x axis [rad].
-    plane : {"strain", "stress"}
+        Angle of ``p1`` from the x axis [rad] (a rotation about z).
+    plane : {"strain", "stress", "3d"}
     density : float
 
     Raises

@@ -4,7 +4,10 @@ Every mesh is an :class:`FEMesh`: a scikit-fem mesh with *named boundaries* (set
 boundary facets) and the element family used on it:
 
 - ``"P1"``: linear triangles, ``"P2"``: quadratic triangles (straight-sided, nodes at the
-  vertices and mid-sides), ``"Q1"``: bilinear quadrilaterals.
+  vertices and mid-sides), ``"Q1"``: bilinear quadrilaterals;
+- in 3-D (:mod:`shakedown.fe.meshes3d`, or a file of tetrahedra or hexahedra): ``"P1"``/
+  ``"P2"`` linear/quadratic tetrahedra (``P2``: nodes at the vertices and mid-edges),
+  ``"Q1"`` trilinear hexahedra.
 
 Structured meshes of a rectangle with ``nx x ny`` cells have ``nx + 1`` nodes along the
 bottom edge for ``P1``/``Q1`` and ``2 nx + 1`` for ``P2``.  Triangle patterns per cell (corners
@@ -50,12 +53,21 @@ class FEMesh:
     def __post_init__(self):
         if self.element not in ELEMENTS:
             raise InputError(f"element must be one of {ELEMENTS}; got {self.element!r}")
-        is_quad = type(self.mesh).__name__.startswith("MeshQuad")
+        kind = type(self.mesh).__name__
+        if not kind.startswith(("MeshTri", "MeshQuad", "MeshTet", "MeshHex")):
+            raise InputError(f"mesh must be a scikit-fem MeshTri, MeshQuad, MeshTet or MeshHex; "
+                             f"got a {kind}")
+        is_quad = kind.startswith(("MeshQuad", "MeshHex"))
         if is_quad != (self.element == "Q1"):
             raise InputError(
-                f"element {self.element!r} does not fit a {type(self.mesh).__name__}: use 'Q1' "
-                "on quadrilateral meshes and 'P1'/'P2' on triangle meshes"
+                f"element {self.element!r} does not fit a {kind}: use 'Q1' on quadrilateral "
+                "and hexahedral meshes and 'P1'/'P2' on triangle and tetrahedral meshes"
             )
+
+    @property
+    def dim(self) -> int:
+        """Space dimension (2 or 3)."""
+        return int(self.mesh.p.shape[0])
 
     @property
     def boundary_names(self) -> tuple[str, ...]:
@@ -79,13 +91,17 @@ class FEMesh:
         """A copy with more named boundaries.
 
         ``boundaries`` maps a name to a facet index array, to a callable of the facet midpoints
-        ``x`` (shape (2, n_facets)) returning booleans, or to a segment ``((x0, y0), (x1, y1))``
-        (facets whose both end points lie on the segment).
+        ``x`` (shape (dim, n_facets)) returning booleans, or (2-D) to a segment
+        ``((x0, y0), (x1, y1))`` (facets whose both end points lie on the segment), or (3-D)
+        to a box ``((x0, y0, z0), (x1, y1, z1))`` (boundary facets whose vertices all lie in
+        the closed axis-aligned box; a flat box selects a patch of a plane face).
         """
         tags = {}
         for name, spec in boundaries.items():
             if callable(spec) or (isinstance(spec, np.ndarray) and spec.dtype.kind in "iu"):
                 tags[name] = spec
+            elif self.dim == 3:
+                tags[name] = _box_facets(self.mesh, spec, name)
             else:
                 tags[name] = _segment_facets(self.mesh, spec, name)
         return replace(self, mesh=self.mesh.with_boundaries(tags))
@@ -97,7 +113,7 @@ class FEMesh:
     @property
     def diameter(self) -> float:
         p = self.mesh.p
-        return float(np.hypot(*(p.max(axis=1) - p.min(axis=1))))
+        return float(np.linalg.norm(p.max(axis=1) - p.min(axis=1)))
 
     def __repr__(self) -> str:
         return (
@@ -127,6 +143,23 @@ def _segment_facets(mesh, segment, name) -> np.ndarray:
         s = (d.T @ (b - a)) / L**2
         dist = np.abs(d[0] * (b - a)[1] - d[1] * (b - a)[0]) / L
         ok &= (dist <= tol) & (s >= -1e-9) & (s <= 1 + 1e-9)
+    return bf[ok]
+
+
+def _box_facets(mesh, box, name) -> np.ndarray:
+    try:
+        lo, hi = np.asarray(box, dtype=float)
+        if lo.shape != (3,) or not np.all(np.isfinite([lo, hi])):
+            raise ValueError
+    except (TypeError, ValueError) as exc:
+        raise InputError(
+            f"boundary {name!r} must be facet indices, a callable of the facet midpoints or a "
+            f"box ((x0, y0, z0), (x1, y1, z1)); got {box!r}") from exc
+    lo, hi = np.minimum(lo, hi), np.maximum(lo, hi)
+    tol = 1e-8 * float(np.ptp(mesh.p, axis=1).max())
+    bf = mesh.boundary_facets()
+    P = mesh.p[:, mesh.facets[:, bf]]  # (3, n_vertices_per_facet, n_boundary_facets)
+    ok = np.all((P >= lo[:, None, None] - tol) & (P <= hi[:, None, None] + tol), axis=(0, 1))
     return bf[ok]
 
 
@@ -256,10 +289,12 @@ def trapezoid(
 def from_file(path, element: str | None = None, boundaries: dict | None = None) -> FEMesh:
     """Read a mesh file through meshio (gmsh, vtk, xdmf, ...).
 
-    Linear triangles or quadrilaterals are read; physical groups of line elements become
-    named boundaries (scikit-fem's reader).  ``boundaries`` adds more names (see
-    :meth:`FEMesh.with_boundaries`, e.g. segments).  ``element`` defaults to ``"P1"`` for
-    triangles and ``"Q1"`` for quadrilaterals.
+    Linear triangles or quadrilaterals (2-D), linear tetrahedra or hexahedra (3-D) are read;
+    physical groups of the facet elements (lines in 2-D; triangles or quadrilaterals in 3-D)
+    become named boundaries (scikit-fem's reader), named by the group's name.  A 2-D mesh
+    stored with a zero z coordinate stays 2-D.  ``boundaries`` adds more names (see
+    :meth:`FEMesh.with_boundaries`: segments in 2-D, boxes in 3-D).  ``element`` defaults to
+    ``"P1"`` for triangles and tetrahedra and ``"Q1"`` for quadrilaterals and hexahedra.
     """
     from pathlib import Path
 
@@ -267,21 +302,29 @@ def from_file(path, element: str | None = None, boundaries: dict | None = None) 
 
     if not Path(path).is_file():
         raise InputError(f"mesh file {str(path)!r} does not exist")
+    import logging
+
+    quiet = logging.getLogger("skfem.io.meshio")  # hexahedral facets are oriented below
+    level = quiet.level
+    quiet.setLevel(logging.ERROR)
     try:
         mesh = Mesh.load(str(path))
     except Exception as exc:  # meshio raises many types
         # the reader's message may quote the file: name only the error's type
         raise InputError(f"could not read mesh file {str(path)!r} ({type(exc).__name__}); "
                          "give a mesh format meshio reads (gmsh .msh, .vtk, .xdmf)") from None
+    finally:
+        quiet.setLevel(level)
     name = type(mesh).__name__
-    if name not in ("MeshTri1", "MeshQuad1"):
+    if name not in ("MeshTri1", "MeshQuad1", "MeshTet1", "MeshHex1"):
         raise InputError(
-            f"mesh file {str(path)!r} holds a {name}; only linear triangles or quadrilaterals "
-            "are supported (choose element='P2' for quadratic fields on a linear mesh)"
+            f"mesh file {str(path)!r} holds a {name}; only linear triangles, quadrilaterals, "
+            "tetrahedra or hexahedra are supported (store the mesh with linear elements and "
+            "choose element='P2' for quadratic fields)"
         )
-    if mesh.p.shape[0] != 2:
+    if name in ("MeshTri1", "MeshQuad1") and mesh.p.shape[0] != 2:
         mesh = replace(mesh, doflocs=mesh.p[:2])
-    element = element or ("Q1" if name == "MeshQuad1" else "P1")
+    element = element or ("Q1" if name in ("MeshQuad1", "MeshHex1") else "P1")
     fm = FEMesh(mesh, element, f"file {path}")
     if mesh.boundaries is None:
         fm = replace(fm, mesh=mesh.with_boundaries({}))

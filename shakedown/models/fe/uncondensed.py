@@ -63,7 +63,8 @@ class UncondensedModel(CondensedModel):
                 model=self.model, K=K, M=None, node_coordinates=self.node_coordinates,
                 normals=self.normals, tangents=self.tangents, node_body=self.node_body,
                 node_index=self.node_index, node_kind=self.node_kind, welded=self.welded,
-                from_cache=False, timings=dict(self.timings), counts=dict(self.counts))
+                from_cache=False, timings=dict(self.timings), counts=dict(self.counts),
+                dim=self.dim)
             cm._lazy["assembled"] = self._lazy["assembled"]
             self._lazy["condensed"] = cm
         return self._lazy["condensed"]
@@ -91,7 +92,8 @@ def uncondensed(asm) -> UncondensedModel:
     from ...model.uncondensed import UncondensedSystem
 
     t0 = time.perf_counter()
-    system = UncondensedSystem(asm.Kz, asm.N, asm.model.friction)
+    extra = {"dim": 3} if asm.dim == 3 else {}
+    system = UncondensedSystem(asm.Kz, asm.N, asm.model.friction, **extra)
     solve = system.K.solve_interior
     welded = {case: asm.welded(case, solve=solve) for case in asm.model.load_cases}
     um = UncondensedModel(
@@ -103,6 +105,7 @@ def uncondensed(asm) -> UncondensedModel:
                  "condensation": 0.0},
         counts={"n_full_dofs": asm.n_full, "n_interior_dofs": asm.n_int,
                 "n_contact_nodes": asm.N, "nnz_K_ii": int(asm.Kii.nnz)},
+        dim=asm.dim,
     )
     um._lazy["assembled"] = asm
     um._lazy["system"] = system

@@ -7,7 +7,10 @@
 * ``dissipation.csv`` -- ``W`` and the change of state of every cycle,
 * ``steady_cycle.csv`` -- the steady cycle's time series (t, node, slip, gap, q, p, state),
 * ``dissipation.png``, ``steady_cycle.png``, ``node_states.png`` and, for two nodes,
-  ``trajectory.png`` (v space) and ``trajectory_tau.png`` (tau = A v space).
+  ``trajectory.png`` (v space) and ``trajectory_tau.png`` (tau = A v space); for a 3-D model
+  with node positions (3-D FE bodies), ``node_states.png`` and the contact patch maps
+  ``contact_patch.png`` (states and traction arrows at four instants), ``stuck_zone.png`` and
+  ``force_loop.png`` (:mod:`shakedown.plotting.contact_patch`) instead of ``steady_cycle.png``.
 
 With ``n_initial_states > 1`` (or several ``initial_slips``) it also runs a uniqueness study
 (:func:`shakedown.uniqueness_study`) and writes ``uniqueness.csv`` and ``uniqueness.png``; the
@@ -231,7 +234,7 @@ def _slipping_nodes(run) -> list[int]:
     t = run.steady_table
     if t is None or len(t) == 0 or "state" not in t:
         return []
-    slipping = t[t["state"].isin(["forward", "backward"])]["node"].unique()
+    slipping = t[t["state"].isin(["forward", "backward", "slip"])]["node"].unique()
     return sorted(int(j) + 1 for j in slipping)
 
 
@@ -265,7 +268,7 @@ def cycles_verdict(run, lam: float, energy: str = "[force x length]", study=None
                      "the final state; raise steps_per_cycle to decide.")
     elif run.status == "periodic":
         slip = _slipping_nodes(run)
-        n = int(np.size(run.final_slip))
+        n = int(np.shape(run.final_slip)[0])
         which = ""
         if len(slip) > 12:
             which = f", {len(slip)} of {n} nodes slip ({_node_list(slip)})"
@@ -318,7 +321,9 @@ def _plots(ctx, run, study, lam, options):
     ax.set_title(f"dissipation per cycle at lam = {lam:.4g}", fontsize=10)
     ctx.output.save_figure("dissipation.png", fig)
     has_steady = run.steady_table is not None and len(run.steady_table) > 0
-    if has_steady:
+    if has_steady and getattr(ctx.system, "dim", 2) == 3:
+        _patch_plots(ctx, run, lam, units)
+    elif has_steady:
         fig, axs = plt.subplots(2, 1, sharex=True, figsize=(6.4, 5.6))
         plot_steady_cycle(run, axs, units=units)
         axs[0].set_title(f"steady cycle at lam = {lam:.4g}"
@@ -339,3 +344,41 @@ def _plots(ctx, run, study, lam, options):
         fig, ax = plt.subplots(figsize=(6, 4))
         plot_uniqueness(study, ax, units=units)
         ctx.output.save_figure("uniqueness.png", fig)
+
+
+def _patch_plots(ctx, run, lam, units):
+    """The 3-D steady cycle as maps of the contact patch (and the node-state image)."""
+    import matplotlib.pyplot as plt
+
+    from ...plotting.contact_patch import (
+        patch_coordinates,
+        plot_force_loop,
+        plot_patch_states,
+        plot_stuck_zone,
+    )
+    from ...plotting.cycles import plot_node_states
+
+    fig, ax = plt.subplots(figsize=(6.4, 3.5))
+    plot_node_states(run, ax)
+    ctx.output.save_figure("node_states.png", fig)
+    fig, ax = plt.subplots(figsize=(6.4, 4.5))
+    plot_force_loop(run, lam, ax, units=units)
+    ctx.output.save_figure("force_loop.png", fig)
+    try:
+        patch_coordinates(ctx.model)
+    except Exception:  # noqa: BLE001 - a 3-D system without node positions: no maps
+        ctx.log("the model has no node positions: contact patch maps not written")
+        return
+    tab = run.steady_table
+    qmax = float(np.hypot(tab["q_x"], tab["q_y"]).max()) or 1.0
+    fig, axs = plt.subplots(2, 2, figsize=(9, 8.4), sharex=True, sharey=True)
+    for ax, t in zip(axs.ravel(), (0.0, 0.25, 0.5, 0.75), strict=True):
+        plot_patch_states(ctx.model, run, t, ax, units=units)
+    fig.legend(*axs[0, 0].get_legend_handles_labels(), loc="lower center", ncol=3,
+               fontsize="small")
+    fig.suptitle(f"contact patch over the steady cycle at lam = {lam:.4g}: node states, arrows "
+                 f"q (longest {qmax:.3g} {units['force']})", fontsize=10)
+    ctx.output.save_figure("contact_patch.png", fig)
+    fig, ax = plt.subplots(figsize=(7.5, 5))
+    plot_stuck_zone(ctx.model, run, ax, units=units)
+    ctx.output.save_figure("stuck_zone.png", fig)

@@ -1,0 +1,172 @@
+"""Maps of a 3-D contact surface over a steady cycle: node states with traction arrows, the zone
+that sticks for the whole cycle over the pressure, and the tangential force loop.
+
+* :func:`patch_coordinates` -- the contact nodes' in-plane coordinates ``(N, 2)`` (a 3-D FE
+  model: its nodes in the mean tangent frame; a model with ``xy``: those).
+* :func:`plot_patch_states` -- stick / slip / separation of every node at one instant of the
+  steady cycle, with the tangential reactions ``q`` as arrows.
+* :func:`plot_stuck_zone` -- nodes stuck over the whole steady cycle, slipping at some instant,
+  or open throughout, over the mean contact pressure.
+* :func:`plot_force_loop` -- total tangential reaction ``sum_i q_i(t)`` against the cyclic load's
+  phase ``lam cos(2 pi t)``: the hysteresis loop of a joint.
+
+Every function takes ``ax=None`` (a new figure is made) and returns the axes it drew on; the
+steady table is that of a 3-D :class:`~shakedown.evolution.cycle_results.CycleRun` (columns
+``t, node, slip_x, slip_y, gap, q_x, q_y, p, state``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..model.errors import InputError
+from .axes import _new_ax, _plt, _unit
+
+__all__ = ["patch_coordinates", "plot_patch_states", "plot_stuck_zone", "plot_force_loop",
+           "STATE_COLOURS_3D"]
+
+#: Colours of the 3-D node states.
+STATE_COLOURS_3D = {"stick": "#7f7f7f", "slip": "#d62728", "separation": "#2ca02c"}
+_COLUMNS = {"t", "node", "q_x", "q_y", "p", "state"}
+
+
+def patch_coordinates(model) -> np.ndarray:
+    """In-plane coordinates ``(N, 2)`` [length] of the contact nodes of ``model``.
+
+    A 3-D FE model (``node_coordinates`` (N, 3), ``tangents`` (N, 2, 3)) is projected on the
+    mean tangent frame ``(t_x, t_y)`` of its nodes (for a plane patch: the patch's own axes); a
+    model with ``xy`` (N, 2) gives those.
+    """
+    xy = getattr(model, "xy", None)
+    if xy is not None and np.shape(xy)[-1] == 2:
+        return np.asarray(xy, float)
+    X = getattr(model, "node_coordinates", None)
+    T = getattr(model, "tangents", None)
+    if X is None or T is None or np.ndim(T) != 3:
+        raise InputError("patch maps need a 3-D model with node_coordinates and tangents "
+                         f"(a 3-D FE model) or xy; got {type(model).__name__}")
+    frame = np.asarray(T, float).mean(axis=0)  # (2, 3)
+    frame /= np.linalg.norm(frame, axis=1)[:, None]
+    return np.asarray(X, float) @ frame.T
+
+
+def _table(run):
+    tab = getattr(run, "steady_table", run)
+    if tab is None or not hasattr(tab, "columns") or not _COLUMNS <= set(tab.columns):
+        raise InputError("need a 3-D CycleRun with a steady table (columns t, node, q_x, q_y, p, "
+                         f"state); got {type(run).__name__}")
+    if len(tab) == 0:
+        raise InputError("the steady table is empty: no steady cycle was reached")
+    return tab
+
+
+def _at(tab, t: float):
+    """Rows of the recorded instant nearest to ``t`` (modulo one period), sorted by node."""
+    times = np.unique(tab["t"].to_numpy(float))
+    frac = times - np.floor(times[0])
+    k = int(np.argmin(np.abs(((frac - t) + 0.5) % 1.0 - 0.5)))
+    rows = tab[tab["t"] == times[k]].sort_values("node")
+    return float(frac[k]), rows
+
+
+def _spacing(xy) -> float:
+    """Mean node spacing of a patch [length]: sqrt(area of the bounding box / N)."""
+    ext = np.ptp(xy, axis=0)
+    area = float(np.prod(ext[ext > 0])) if np.any(ext > 0) else 1.0
+    return float(np.sqrt(area / max(len(xy), 1))) or 1.0
+
+
+def _square(ax, xy):
+    ax.set_aspect("equal")
+    span = np.ptp(xy, axis=0).max() if len(xy) > 1 else 1.0
+    pad = 0.08 * span
+    ax.set_xlim(xy[:, 0].min() - pad, xy[:, 0].max() + pad)
+    ax.set_ylim(xy[:, 1].min() - pad, xy[:, 1].max() + pad)
+
+
+def plot_patch_states(model, run, t: float, ax=None, *, units=None, scale=None):
+    """Node states at the recorded instant nearest to ``t`` [periods], with arrows of ``q``.
+
+    Parameters
+    ----------
+    model : 3-D FE model or a model with ``xy``
+        Gives the node positions (:func:`patch_coordinates`).
+    run : CycleRun or its steady table
+    t : float
+        Instant in the period, ``0 <= t < 1``.
+    scale : float, optional
+        Force per unit of length on the map [force / length] (shared between panels when
+        given); default: the largest ``|q|`` of the steady cycle spans 1.5 mean node spacings.
+    """
+    tab = _table(run)
+    xy = patch_coordinates(model)
+    t_k, rows = _at(tab, t)
+    nodes = rows["node"].to_numpy(int)
+    ax = _new_ax(ax)
+    states = rows["state"].astype(str).to_numpy()
+    for s, colour in STATE_COLOURS_3D.items():  # every state in the legend, drawn or not
+        m = states == s
+        ax.scatter(*xy[nodes[m]].T, s=36, marker="s", color=colour, label=s, zorder=2)
+    q = rows[["q_x", "q_y"]].to_numpy(float)
+    if scale is None:
+        qmax = float(np.hypot(tab["q_x"], tab["q_y"]).max()) or 1.0
+        scale = qmax / (1.5 * _spacing(xy))
+    ax.quiver(*xy[nodes].T, *q.T, angles="xy", scale_units="xy", scale=scale, color="black",
+              width=0.004, zorder=3)
+    _square(ax, xy)
+    ax.set_title(f"t = {t_k:.3g} T", fontsize=10)
+    ax.set_xlabel(f"t_x {_unit(units, 'length')}")
+    ax.set_ylabel(f"t_y {_unit(units, 'length')}")
+    return ax
+
+
+def plot_stuck_zone(model, run, ax=None, *, units=None):
+    """Nodes stuck over the whole steady cycle, slipping at some instant, or always open, drawn
+    over the cycle's mean contact pressure (filled contours)."""
+    tab = _table(run)
+    xy = patch_coordinates(model)
+    n = xy.shape[0]
+    state = tab.pivot_table(index="node", columns="t", values="state", aggfunc="first")
+    p_mean = tab.groupby("node")["p"].mean().reindex(range(n)).to_numpy(float)
+    ax = _new_ax(ax)
+    if n >= 3 and np.ptp(xy[:, 0]) > 0 and np.ptp(xy[:, 1]) > 0:
+        cs = ax.tricontourf(xy[:, 0], xy[:, 1], p_mean, levels=12, cmap="Blues")
+        _plt().colorbar(cs, ax=ax, label=f"mean p {_unit(units, 'force')}")
+    S = state.reindex(range(n)).to_numpy(str)
+    kinds = {
+        "stuck all cycle": np.all(S == "stick", axis=1),
+        "slips": np.any(S == "slip", axis=1),
+        "open all cycle": np.all(S == "separation", axis=1),
+    }
+    kinds["stick / open"] = ~(kinds["stuck all cycle"] | kinds["slips"] | kinds["open all cycle"])
+    style = {"stuck all cycle": ("s", "#404040"), "slips": ("o", "#d62728"),
+             "open all cycle": ("x", "#2ca02c"), "stick / open": ("^", "#9467bd")}
+    for name, m in kinds.items():
+        if m.any():
+            mk, c = style[name]
+            ax.scatter(*xy[m].T, marker=mk, color=c, s=30, label=f"{name} ({int(m.sum())})",
+                       zorder=3)
+    _square(ax, xy)
+    ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.25, 1.0), borderaxespad=0)
+    ax.set_xlabel(f"t_x {_unit(units, 'length')}")
+    ax.set_ylabel(f"t_y {_unit(units, 'length')}")
+    ax.set_title("permanent stick zone over the steady cycle", fontsize=10)
+    return ax
+
+
+def plot_force_loop(run, lam: float, ax=None, *, units=None):
+    """Total tangential reactions ``sum_i q_ix``, ``sum_i q_iy`` over the steady cycle against
+    ``lam cos(2 pi t)`` (the phase of a cosine cyclic load): the joint's hysteresis loop."""
+    tab = _table(run)
+    tot = tab.groupby("t")[["q_x", "q_y"]].sum().sort_index()
+    t = tot.index.to_numpy(float)
+    x = float(lam) * np.cos(2 * np.pi * t)
+    ax = _new_ax(ax)
+    ax.plot(np.r_[x, x[:1]], np.r_[tot["q_x"], tot["q_x"].iloc[:1]], "-o", ms=2,
+            label="sum q_x")
+    ax.plot(np.r_[x, x[:1]], np.r_[tot["q_y"], tot["q_y"].iloc[:1]], "--", label="sum q_y")
+    ax.set_xlabel("cyclic load phase lam cos(2 pi t)")
+    ax.set_ylabel(f"total tangential reaction {_unit(units, 'force')}")
+    ax.legend(fontsize="small")
+    ax.set_title("tangential force loop over the steady cycle", fontsize=10)
+    return ax
