@@ -11,7 +11,6 @@ from pathlib import Path
 
 import nbformat
 import pytest
-
 from notebook_figures import FIGURES, executed_copies
 
 ROOT = Path(__file__).resolve().parents[1]
