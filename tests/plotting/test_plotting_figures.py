@@ -85,3 +85,33 @@ def test_dissipation_axis_units_keep_their_brackets():
     assert ax.get_ylabel() == "W per cycle [N mm]"
     ax = plot_dissipation(np.array([1.0, 0.5, 0.4, 0.4]))
     assert ax.get_ylabel() == "W per cycle [force x length]"
+
+
+@pytest.fixture(scope="module")
+def small_sweep(tmp_path_factory):
+    from shakedown.studies.sweep import SweepSpec, run_sweep
+
+    spec = SweepSpec(n_cracks=8, density=0.1, n_lams=5, n_band=2, n_adj=1, n_refine=1,
+                     n_states=3, steps_per_cycle=16, max_cycles=60, seed=11)
+    return run_sweep(spec, tmp_path_factory.mktemp("sweep") / "s", n_workers=1, progress=False)
+
+
+def test_dissipation_vs_lam_marks_every_bound_with_its_value(small_sweep):
+    """lam1, lam2 (not only lam_adj, lam_u) in the legend with their values; 1 realisation is
+    not "1 realisation(s)"; units in brackets; legend entries match what is drawn."""
+    from shakedown.plotting.sweep import plot_fractions, plot_sweep
+
+    r = small_sweep.realisations.iloc[0]
+    for axis in ("lam", "x"):
+        ax = plot_sweep(small_sweep, axis=axis)
+        entries = legend_entries(ax)
+        for name, col in (("lambda_1", "lam1"), ("lambda_2", "lam2"), ("lambda_{adj}", "lam_adj"),
+                          ("lambda_u", "lam_u")):
+            if np.isfinite(r[col]) and not (col == "lam_adj" and r.lam_adj >= r.lam1):
+                assert any(name in e and f"{r[col]:.4g}" in e for e in entries), (name, entries)
+        assert "realisation(s)" not in ax.get_title() and "realisation" not in ax.get_title()
+        check_legend_matches_drawn(ax)
+        check_units(ax)
+        ax = plot_fractions(small_sweep, axis=axis)
+        check_legend_matches_drawn(ax)
+        check_units(ax)
