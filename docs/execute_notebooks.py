@@ -28,7 +28,8 @@ DRAWS = re.compile(r"plt\.(subplots|figure|show)\(|\bplot_\w+\(|\.plot\(|\.loglo
 def execute(nb, workdir: Path, timeout: int = 600):
     """Execute the notebook ``nb`` (an ``nbformat`` node, changed in place) in ``workdir``.
 
-    The kernel gets :data:`KERNEL_ENV` on top of this process's environment; errors raise
+    The kernel gets :data:`KERNEL_ENV` on top of this process's environment and imports the
+    package of this checkout (its root first on ``PYTHONPATH``); errors raise
     (``nbclient.exceptions.CellExecutionError``) with the outputs up to the failing cell kept.
     """
     import nbclient
@@ -36,7 +37,9 @@ def execute(nb, workdir: Path, timeout: int = 600):
     os.environ["SHAKEDOWN_NOTEBOOK_SMALL"] = "1"
     client = nbclient.NotebookClient(nb, timeout=timeout, kernel_name="python3",
                                      resources={"metadata": {"path": str(workdir)}})
-    client.execute(env={**os.environ, **KERNEL_ENV})
+    # the kernel imports this checkout's package (not another installed copy)
+    path = os.pathsep.join(p for p in (str(ROOT), os.environ.get("PYTHONPATH", "")) if p)
+    client.execute(env={**os.environ, **KERNEL_ENV, "PYTHONPATH": path})
     return nb
 
 
