@@ -58,12 +58,19 @@ def constraint_style(k: int, n_nodes: int = 2) -> tuple[str, str]:
     return _COLOURS[r], f"{name} extreme (seed {_ROMAN[r]})"
 
 
-def frame_lines(G, b, lo, hi, pad: float = 0.08):
-    """A view box ``(lo, hi)`` grown so that every line ``G_k . x = b_k`` crosses it.
+#: Legend suffix of an extreme line too far away to be framed with the rest of the picture.
+OUTSIDE = ": outside the picture"
+
+
+def frame_lines(G, b, lo, hi, pad: float = 0.08, max_growth: float = 2.0):
+    """A view box ``(lo, hi)`` grown so that every line ``G_k . x = b_k`` crosses it, when
+    that costs at most a factor ``max_growth`` in the box's size.
 
     A line that misses the box, or only passes within ``pad`` times the box size of its edge,
     gets the point of it nearest the box centre inside the box (with that margin), so no
-    constraint is named in a legend and left outside the picture or on its frame.
+    constraint is named in a legend and left outside the picture or on its frame.  A line so far
+    away that framing it would shrink the rest of the picture more than ``max_growth`` times
+    is left out and reported: its legend entry says so (:data:`OUTSIDE`).
 
     Parameters
     ----------
@@ -77,9 +84,13 @@ def frame_lines(G, b, lo, hi, pad: float = 0.08):
     Returns
     -------
     lo, hi : ndarray, shape (2,)
+    outside : set of int
+        The lines left outside the box.
     """
     lo, hi = np.array(lo, float), np.array(hi, float)
-    for g, off in zip(np.asarray(G, float), np.asarray(b, float), strict=True):
+    size0 = np.maximum(hi - lo, 1e-300)
+    outside = set()
+    for k, (g, off) in enumerate(zip(np.asarray(G, float), np.asarray(b, float), strict=True)):
         nn = float(g @ g)
         if nn == 0:
             continue
@@ -92,5 +103,9 @@ def frame_lines(G, b, lo, hi, pad: float = 0.08):
             continue  # the line crosses the box already
         c = 0.5 * (lo + hi)
         p = c - g * (g @ c - off) / nn
-        lo, hi = np.minimum(lo, p - margin), np.maximum(hi, p + margin)
-    return lo, hi
+        new_lo, new_hi = np.minimum(lo, p - margin), np.maximum(hi, p + margin)
+        if np.max((new_hi - new_lo) / size0) > max_growth:
+            outside.add(k)
+            continue
+        lo, hi = new_lo, new_hi
+    return lo, hi, outside

@@ -6,7 +6,7 @@ import numpy as np
 
 from ..bounds.engine import ShakedownBounds, extreme_constraints, safe_region
 from ..model.errors import InputError
-from .axes import SAFE_REGION, SEED_ORDER, _unit, constraint_style, frame_lines
+from .axes import OUTSIDE, SAFE_REGION, SEED_ORDER, _unit, constraint_style, frame_lines
 
 
 def _ax(ax):
@@ -86,7 +86,7 @@ def plot_constraints_2d(system, load, lam: float, *, t=None, ax=None, limits=Non
         if state is not None:  # the marked state inside the picture too
             lo = np.minimum(lo, np.asarray(state, float))
             hi = np.maximum(hi, np.asarray(state, float))
-        lo, hi = frame_lines(G, b, np.asarray(lo) - pad, np.asarray(hi) + pad)
+        lo, hi, _ = frame_lines(G, b, np.asarray(lo) - pad, np.asarray(hi) + pad)
         limits = (lo[0], hi[0], lo[1], hi[1])
     xlim, ylim = limits[:2], limits[2:]
     # order rows as the seed: I (node 1 back), II (node 1 fwd), III (node 2 back), IV (node 2 fwd)
@@ -95,6 +95,8 @@ def plot_constraints_2d(system, load, lam: float, *, t=None, ax=None, limits=Non
         seg = _line_segment(G[k], b[k], xlim, ylim) if show_extremes else None
         if seg is not None:
             ax.plot(seg[:, 0], seg[:, 1], "--", color=colour, lw=1.2, label=label)
+        elif show_extremes:  # named, and said to be outside (not silently missing)
+            ax.plot([], [], "--", color=colour, lw=1.2, label=label + OUTSIDE)
         if t is not None:
             bt = extreme_constraints(system, load).instantaneous(system, load, t, lam)[k]
             seg_t = _line_segment(G[k], bt, xlim, ylim)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..model.errors import InputError
-from .axes import SAFE_REGION, SEED_ORDER, _new_ax, _plt, _unit, constraint_style, frame_lines
+from .axes import OUTSIDE, SAFE_REGION, SEED_ORDER, _new_ax, _plt, _unit, constraint_style, frame_lines
 
 
 def _lines(system, load, lam, times):
@@ -133,8 +133,9 @@ def plot_trajectory(system, load, lam: float, trajectories=None, ax=None, *, spa
     lo, hi = allp.min(axis=0), allp.max(axis=0)
     pad = 0.15 * max(float(np.max(hi - lo)), 1e-12)
     lo, hi = lo - pad, hi + pad
-    if extremes:  # every extreme line named in the legend crosses the picture
-        lo, hi = frame_lines(Gs, b_ext, lo, hi)
+    outside = set()
+    if extremes:  # every extreme line named in the legend crosses the picture, or says not
+        lo, hi, outside = frame_lines(Gs, b_ext, lo, hi)
     if shade_safe and len(poly) >= 3:
         P = poly @ T.T
         ax.fill(P[:, 0], P[:, 1], color="0.85", zorder=0, label=SAFE_REGION)
@@ -143,6 +144,9 @@ def plot_trajectory(system, load, lam: float, trajectories=None, ax=None, *, spa
         offs = ([b_ext[k]] if extremes else []) + [b[k] for b in b_inst]
         for i, b in enumerate(offs):
             dashed = extremes and i == 0
+            if dashed and k in outside:
+                ax.plot([], [], "--", color=colour, lw=1.2, label=name + OUTSIDE)
+                continue
             _axline(ax, Gs[k], b, color=colour, ls="--" if dashed else "-",
                     lw=1.2 if dashed else 0.6, alpha=1.0 if dashed else 0.5,
                     label=name if dashed else None)

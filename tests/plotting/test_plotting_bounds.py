@@ -13,6 +13,7 @@ import pytest  # noqa: E402
 from figure_checks import check_legend_matches_drawn, check_units, legend_entries  # noqa: E402
 
 import shakedown as sd  # noqa: E402
+from shakedown.plotting.axes import OUTSIDE  # noqa: E402
 from shakedown.plotting.bounds import plot_constraints_2d, plot_region_vs_lam  # noqa: E402
 from shakedown.plotting.cycles import plot_trajectory  # noqa: E402
 
@@ -48,7 +49,7 @@ def _constraint_lines(ax) -> dict:
 
 def test_safe_region_and_trajectory_name_and_colour_the_constraints_alike(coupled):
     system, load, b = coupled
-    for lam in (0.0, b.safe_lam, 0.5 * (b.lam1 + b.lam2), 0.9):
+    for lam in (0.0, b.safe_lam, 0.5 * (b.lam1 + b.lam2), 0.9, 0.98 * b.lam2):
         ax1 = plot_constraints_2d(system, load, lam, units=UNITS)
         run = sd.solve_cycles(system, load, lam, steps_per_cycle=16, max_cycles=50)
         _, ax2 = plt.subplots()
@@ -56,7 +57,8 @@ def test_safe_region_and_trajectory_name_and_colour_the_constraints_alike(couple
         c1, c2 = _constraint_lines(ax1), _constraint_lines(ax2)
         assert set(c1) == set(c2) == {"I_1", "II_1", "I_2", "II_2"}, (c1, c2)
         assert c1 == c2, f"colours differ at lam = {lam}: {c1} vs {c2}"
-        names = lambda ax: [e for e in legend_entries(ax) if "extreme" in e]  # noqa: E731
+        names = lambda ax: [e.removesuffix(OUTSIDE) for e in legend_entries(ax)  # noqa: E731
+                            if "extreme" in e]
         assert names(ax1) == names(ax2), (names(ax1), names(ax2))  # same words, same order
         for ax in (ax1, ax2):
             check_legend_matches_drawn(ax)
@@ -98,3 +100,16 @@ def test_a_marked_state_must_be_two_slips(coupled):
     system, load, b = coupled
     with pytest.raises(ValueError, match=r"state must be the slips \(v_1, v_2\).*got shape \(0,\)"):
         plot_constraints_2d(system, load, b.safe_lam, state=np.zeros(0))
+
+
+def test_a_far_constraint_is_named_outside_instead_of_shrinking_the_region(coupled):
+    """Near lam2 the region is small and II_1 far away: framing it would flatten the picture,
+    so its entry says it is outside; the region keeps most of the view."""
+    system, load, b = coupled
+    ax = plot_constraints_2d(system, load, 0.98 * b.lam2)
+    entries = legend_entries(ax)
+    assert [e for e in entries if e.endswith(OUTSIDE)] == ["II_1 extreme (seed II)" + OUTSIDE]
+    check_legend_matches_drawn(ax)
+    verts = sd.safe_region(system, load, 0.98 * b.lam2).vertices_2d()
+    width = np.ptp(verts[:, 0]) / np.ptp(ax.get_xlim())
+    assert width > 0.25, width  # the region fills a fair part of the picture
