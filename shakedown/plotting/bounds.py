@@ -33,7 +33,7 @@ def _line_segment(g, b, xlim, ylim):
 
 def plot_constraints_2d(system, load, lam: float, *, t=None, ax=None, limits=None,
                         show_region: bool = True, show_extremes: bool = True, state=None,
-                        state_label: str = "state", units=None):
+                        state_label: str = "state", units=None, legend: str = "outside"):
     """The four constraint lines of a two-node system in ``v``-space (seed 002 Figs. 2-4).
 
     Constraint ``I``/``II`` belong to node 1 (slip backward / forward), ``III``/``IV`` to node 2
@@ -58,6 +58,9 @@ def plot_constraints_2d(system, load, lam: float, *, t=None, ax=None, limits=Non
         What the state is, for the legend (``"safe state"`` for the bounds' safe state).
     units : dict, optional
         ``{"length": ...}`` for the axis labels (default ``[length]``).
+    legend : {"outside", "inside", "none"}
+        The legend beside the axes (nothing covered; the default), inside them (side-by-side
+        panels), or none.
 
     Returns
     -------
@@ -65,6 +68,8 @@ def plot_constraints_2d(system, load, lam: float, *, t=None, ax=None, limits=Non
     """
     if system.n_nodes != 2:
         raise InputError(f"plot_constraints_2d needs a two-node system; got {system.n_nodes} nodes")
+    if legend not in ("outside", "inside", "none"):
+        raise InputError(f"legend must be 'outside', 'inside' or 'none'; got {legend!r}")
     if state is not None and np.shape(state) != (2,):
         raise InputError(f"state must be the slips (v_1, v_2) of the two nodes; got shape "
                          f"{np.shape(state)}: pass two numbers, or None for no marked state")
@@ -122,7 +127,10 @@ def plot_constraints_2d(system, load, lam: float, *, t=None, ax=None, limits=Non
     ax.set_xlabel(f"$v_1$, slip of node 1 {_unit(units, 'length')}")
     ax.set_ylabel(f"$v_2$, slip of node 2 {_unit(units, 'length')}")
     ax.set_title(rf"extreme constraints at $\lambda$ = {lam:.4g}")
-    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0)
+    if legend == "outside":
+        ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0)
+    elif legend == "inside":
+        ax.legend(fontsize=7, loc="best")
     ax.set_aspect("equal", adjustable="box")
     return ax
 

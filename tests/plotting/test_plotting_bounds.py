@@ -113,3 +113,12 @@ def test_a_far_constraint_is_named_outside_instead_of_shrinking_the_region(coupl
     verts = sd.safe_region(system, load, 0.98 * b.lam2).vertices_2d()
     width = np.ptp(verts[:, 0]) / np.ptp(ax.get_xlim())
     assert width > 0.25, width  # the region fills a fair part of the picture
+
+
+def test_legend_placement_is_checked(coupled):
+    system, load, b = coupled
+    ax = plot_constraints_2d(system, load, b.safe_lam, legend="inside")
+    check_legend_matches_drawn(ax)
+    assert plot_constraints_2d(system, load, b.safe_lam, legend="none").get_legend() is None
+    with pytest.raises(ValueError, match="legend must be 'outside', 'inside' or 'none'; got 'left'"):
+        plot_constraints_2d(system, load, b.safe_lam, legend="left")
