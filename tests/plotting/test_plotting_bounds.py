@@ -122,3 +122,27 @@ def test_legend_placement_is_checked(coupled):
     assert plot_constraints_2d(system, load, b.safe_lam, legend="none").get_legend() is None
     with pytest.raises(ValueError, match="legend must be 'outside', 'inside' or 'none'; got 'left'"):
         plot_constraints_2d(system, load, b.safe_lam, legend="left")
+
+
+def test_the_bounds_analysis_marks_the_safe_state_on_its_own_picture(tmp_path, monkeypatch):
+    """safe_region_*.png at the safe state's lam shows that state (it was drawn unmarked)."""
+    import json
+
+    import shakedown.plotting.bounds as pb
+    from shakedown.scenes.cli import main
+
+    calls = []
+    real = pb.plot_constraints_2d
+
+    def spy(system, load, lam, **kw):
+        calls.append((lam, kw))
+        return real(system, load, lam, **kw)
+
+    monkeypatch.setattr(pb, "plot_constraints_2d", spy)
+    assert main(["bounds", "two_node_coupled", "-q", "-o", str(tmp_path / "b")]) == 0
+    res = json.loads((tmp_path / "b" / "bounds.json").read_text())
+    marked = [(lam, kw) for lam, kw in calls if kw.get("state") is not None]
+    assert len(marked) == 1 and len(calls) >= 2, calls
+    lam, kw = marked[0]
+    assert lam == pytest.approx(res["safe_lam"]) and kw["state_label"] == "safe state"
+    np.testing.assert_allclose(kw["state"], res["safe_state"])
