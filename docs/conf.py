@@ -1,6 +1,7 @@
 """Sphinx configuration of the shakedown documentation.
 
-Build (no network, ~1 min):
+Build (no network, ~1 min; math is rendered by the MathJax copy of the package
+``sphinx-mathjax-offline``, an extra of ``.[docs]``, so pages read offline too):
 
     python docs/execute_notebooks.py          # once: the notebooks with their figures (small size)
     python -m sphinx -W --keep-going -b html docs docs/_build/html
@@ -39,6 +40,7 @@ version = release = __version__
 extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.mathjax",
+    "sphinx-mathjax-offline",  # MathJax 3 from the package into _static/mathjax: no CDN
     "sphinx.ext.viewcode",
     "numpydoc",
     "myst_nb",

@@ -56,22 +56,18 @@ def executed_notebooks(tmp_path_factory):
     executing the notebooks again.
     """
     nbformat = pytest.importorskip("nbformat")
-    nbclient = pytest.importorskip("nbclient")
+    pytest.importorskip("nbclient")
     folder = tmp_path_factory.mktemp("executed_notebooks")
     done = {}
+
+    from notebook_figures import FIGURES  # docs/execute_notebooks.py: one way to execute
 
     def get(path: Path):
         path = Path(path)
         if path.name not in done:
-            os.environ["SHAKEDOWN_NOTEBOOK_SMALL"] = "1"
-            os.environ["MPLBACKEND"] = "Agg"
             nb = nbformat.read(path, as_version=4)
-            work = tmp_path_factory.mktemp(path.stem)
-            client = nbclient.NotebookClient(
-                nb, timeout=600, kernel_name="python3", resources={"metadata": {"path": str(work)}}
-            )
             try:
-                client.execute()
+                FIGURES.execute(nb, tmp_path_factory.mktemp(path.stem))
                 error = None
                 nbformat.write(nb, folder / path.name)
             except Exception as exc:  # noqa: BLE001 - reported by the notebook's own test

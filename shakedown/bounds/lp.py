@@ -19,6 +19,41 @@ from ..model import citations
 
 INF = highspy.kHighsInf
 
+_BANNER_SHOWN = False
+
+
+def quiet_highs() -> highspy.Highs:
+    """A ``highspy.Highs`` model that prints nothing.
+
+    HiGHS prints its banner ("Running HiGHS ...") to the C-level standard output when the first
+    model of a process is constructed, before ``output_flag`` can be set; later models print
+    nothing.  The first construction therefore runs with file descriptor 1 sent to the null
+    device (C buffers flushed before it is restored), so the banner reaches neither a terminal,
+    a notebook, nor the stdout of ``shakedown bounds``.
+    """
+    global _BANNER_SHOWN
+    if not _BANNER_SHOWN:
+        import ctypes
+        import os
+        import sys
+
+        sys.stdout.flush()
+        libc = ctypes.CDLL(None)
+        saved = os.dup(1)
+        try:
+            with open(os.devnull, "w") as null:
+                os.dup2(null.fileno(), 1)
+                h = highspy.Highs()
+                libc.fflush(None)
+        finally:
+            os.dup2(saved, 1)
+            os.close(saved)
+        _BANNER_SHOWN = True
+    else:
+        h = highspy.Highs()
+    h.setOptionValue("output_flag", False)
+    return h
+
 
 @dataclass(frozen=True)
 class LPAnswer:
@@ -89,8 +124,7 @@ class ReusableLP:
         self.n_solves = 0
         self.total_iterations = 0
         citations.register("huangfu2018")
-        h = highspy.Highs()
-        h.setOptionValue("output_flag", False)
+        h = quiet_highs()
         h.setOptionValue("presolve", "off")  # keep the basis between solves
         h.setOptionValue("solver", "simplex")
         h.setOptionValue("time_limit", float(time_limit))

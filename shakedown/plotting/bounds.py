@@ -6,9 +6,7 @@ import numpy as np
 
 from ..bounds.engine import ShakedownBounds, extreme_constraints, safe_region
 from ..model.errors import InputError
-
-_COLORS = ("tab:blue", "tab:orange", "tab:green", "tab:red")
-_ROMAN = ("I", "II", "III", "IV")
+from .axes import OUTSIDE, SAFE_REGION, SEED_ORDER, _unit, constraint_style, frame_lines
 
 
 def _ax(ax):
@@ -34,11 +32,13 @@ def _line_segment(g, b, xlim, ylim):
 
 
 def plot_constraints_2d(system, load, lam: float, *, t=None, ax=None, limits=None,
-                        show_region: bool = True, show_extremes: bool = True, state=None):
+                        show_region: bool = True, show_extremes: bool = True, state=None,
+                        state_label: str = "state", units=None, legend: str = "outside"):
     """The four constraint lines of a two-node system in ``v``-space (seed 002 Figs. 2-4).
 
     Constraint ``I``/``II`` belong to node 1 (slip backward / forward), ``III``/``IV`` to node 2
-    (the seed's numbering; the package's labels are ``I_1, I_2, II_1, II_2``, nodes from 1).  Extreme
+    (the seed's numbering; the package's labels are ``I_1, I_2, II_1, II_2``, nodes from 1),
+    named and coloured as in :func:`~shakedown.plotting.cycles.plot_trajectory`.  Extreme
     positions are dashed, the safe shakedown region ``H(lam)`` is shaded, and if ``t`` is given
     the instantaneous lines at time ``t`` (cycles) are drawn solid with the excluded side hatched.
 
@@ -50,9 +50,17 @@ def plot_constraints_2d(system, load, lam: float, *, t=None, ax=None, limits=Non
     t : float, optional
         Time (cycles) of the instantaneous lines.
     limits : (xmin, xmax, ymin, ymax), optional
-        Plot window in slip units; by default a box around the region.
+        Plot window in slip units; by default a box around the region that every extreme
+        line crosses.
     state : array_like (2,), optional
-        A slip state to mark.
+        A slip state to mark (a black dot; its legend entry gives its value).
+    state_label : str
+        What the state is, for the legend (``"safe state"`` for the bounds' safe state).
+    units : dict, optional
+        ``{"length": ...}`` for the axis labels (default ``[length]``).
+    legend : {"outside", "inside", "none"}
+        The legend beside the axes (nothing covered; the default), inside them (side-by-side
+        panels), or none.
 
     Returns
     -------
@@ -60,6 +68,11 @@ def plot_constraints_2d(system, load, lam: float, *, t=None, ax=None, limits=Non
     """
     if system.n_nodes != 2:
         raise InputError(f"plot_constraints_2d needs a two-node system; got {system.n_nodes} nodes")
+    if legend not in ("outside", "inside", "none"):
+        raise InputError(f"legend must be 'outside', 'inside' or 'none'; got {legend!r}")
+    if state is not None and np.shape(state) != (2,):
+        raise InputError(f"state must be the slips (v_1, v_2) of the two nodes; got shape "
+                         f"{np.shape(state)}: pass two numbers, or None for no marked state")
     ax = _ax(ax)
     region = safe_region(system, load, lam)
     G, b = region.normals, region.offsets
@@ -75,41 +88,49 @@ def plot_constraints_2d(system, load, lam: float, *, t=None, ax=None, limits=Non
         if len(verts) < 3:
             span = max(span, np.abs(b).max() / np.abs(G).max())
         pad = 0.6 * span
-        limits = (lo[0] - pad, hi[0] + pad, lo[1] - pad, hi[1] + pad)
+        if state is not None:  # the marked state inside the picture too
+            lo = np.minimum(lo, np.asarray(state, float))
+            hi = np.maximum(hi, np.asarray(state, float))
+        lo, hi, _ = frame_lines(G, b, np.asarray(lo) - pad, np.asarray(hi) + pad)
+        limits = (lo[0], hi[0], lo[1], hi[1])
     xlim, ylim = limits[:2], limits[2:]
     # order rows as the seed: I (node 1 back), II (node 1 fwd), III (node 2 back), IV (node 2 fwd)
-    order = (0, 2, 1, 3)
-    for r, k in enumerate(order):
+    for k in SEED_ORDER:
+        colour, label = constraint_style(k)
         seg = _line_segment(G[k], b[k], xlim, ylim) if show_extremes else None
         if seg is not None:
-            n = region.normals.shape[1]
-            name = f"{'I' if k < n else 'II'}_{k % n + 1}"  # nodes numbered from 1
-            ax.plot(seg[:, 0], seg[:, 1], "--", color=_COLORS[r], lw=1.2,
-                    label=f"{_ROMAN[r]}$^E$ ({name})")
+            ax.plot(seg[:, 0], seg[:, 1], "--", color=colour, lw=1.2, label=label)
+        elif show_extremes:  # named, and said to be outside (not silently missing)
+            ax.plot([], [], "--", color=colour, lw=1.2, label=label + OUTSIDE)
         if t is not None:
             bt = extreme_constraints(system, load).instantaneous(system, load, t, lam)[k]
             seg_t = _line_segment(G[k], bt, xlim, ylim)
             if seg_t is not None:
-                ax.plot(seg_t[:, 0], seg_t[:, 1], "-", color=_COLORS[r], lw=1.8)
+                ax.plot(seg_t[:, 0], seg_t[:, 1], "-", color=colour, lw=1.8)
                 # hatch the excluded side: a short arrow along the normal
                 mid = seg_t.mean(axis=0)
                 nrm = G[k] / np.linalg.norm(G[k]) * 0.05 * (xlim[1] - xlim[0])
                 ax.annotate("", xy=mid + nrm, xytext=mid,
-                            arrowprops={"arrowstyle": "->", "color": _COLORS[r]})
+                            arrowprops={"arrowstyle": "->", "color": colour})
     if show_region and len(verts) >= 3:
-        ax.fill(verts[:, 0], verts[:, 1], color="0.85", zorder=0, label=r"safe region $\mathcal{H}$")
+        ax.fill(verts[:, 0], verts[:, 1], color="0.85", zorder=0, label=SAFE_REGION)
     elif show_region and len(verts):
         shape = "a segment" if len(verts) == 2 else "a point"
         ax.plot(verts[:, 0], verts[:, 1], "k.-", ms=8, lw=2.5,
-                label=rf"safe region $\mathcal{{H}}$ (degenerate: {shape})")
+                label=f"{SAFE_REGION} (degenerate: {shape})")
     if state is not None:
-        ax.plot(*np.asarray(state, float), "ko", ms=5, label="state")
+        v = np.asarray(state, float)
+        ax.plot(v[0], v[1], "ko", ms=6, zorder=5,
+                label=f"{state_label} v = ({v[0]:.3g}, {v[1]:.3g})")
     ax.set_xlim(*xlim)
     ax.set_ylim(*ylim)
-    ax.set_xlabel("$v_1$, slip of node 1 [length]")
-    ax.set_ylabel("$v_2$, slip of node 2 [length]")
+    ax.set_xlabel(f"$v_1$, slip of node 1 {_unit(units, 'length')}")
+    ax.set_ylabel(f"$v_2$, slip of node 2 {_unit(units, 'length')}")
     ax.set_title(rf"extreme constraints at $\lambda$ = {lam:.4g}")
-    ax.legend(fontsize=8, loc="best")
+    if legend == "outside":
+        ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0)
+    elif legend == "inside":
+        ax.legend(fontsize=7, loc="best")
     ax.set_aspect("equal", adjustable="box")
     return ax
 
@@ -124,13 +145,15 @@ def region_curve(system, load, lams):
     return area
 
 
-def plot_region_vs_lam(bounds: ShakedownBounds, *, system=None, load=None, lams=None, ax=None):
+def plot_region_vs_lam(bounds: ShakedownBounds, *, system=None, load=None, lams=None, ax=None,
+                       units=None):
     """Active-constraint count (and, for two nodes, the safe-region area) against ``lam``.
 
     The count uses the activity intervals of ``bounds``; ``lam1`` and ``lam2`` are marked.  With
     the default ``intervals="lam1"`` some upper ends are only lower bounds, so above ``lam1`` the
     count is a lower bound (the legend says so); ``intervals=True`` gives the exact count.
-    Pass ``system`` and ``load`` to add the area curve (two-node systems).
+    Pass ``system`` and ``load`` to add the area curve (two-node systems; in length², the unit
+    of ``units["length"]``, default ``[length²]``).
 
     Returns
     -------
@@ -150,8 +173,8 @@ def plot_region_vs_lam(bounds: ShakedownBounds, *, system=None, load=None, lams=
         # intervals="lam1": above lam1 some upper ends are lower bounds, so is the count
         label += r" (a lower bound above $\lambda_1$)"
     ax.step(lams, count, where="post", color="tab:blue", label=label)
-    ax.set_xlabel(r"load factor $\lambda$")
-    ax.set_ylabel(f"active constraints (of {2 * bounds.n_nodes})", color="tab:blue")
+    ax.set_xlabel(r"load factor $\lambda$ [-]")
+    ax.set_ylabel(f"active constraints (of {2 * bounds.n_nodes}) [-]", color="tab:blue")
     ax.set_ylim(-0.2, 2 * bounds.n_nodes + 0.5)
     lam1, lam2, lam_adj = bounds.lam1, bounds.lam2, bounds.lam_adj
     # the values go in the legend, not as text on the plot: equal values cannot overlap and
@@ -172,8 +195,10 @@ def plot_region_vs_lam(bounds: ShakedownBounds, *, system=None, load=None, lams=
                    label=rf"$\lambda_{{adj}}$ = {lam_adj:.4g} (node {bounds.adjacency_node + 1})")
     if system is not None and load is not None and system.n_nodes == 2:
         ax2 = ax.twinx()
-        ax2.plot(lams, region_curve(system, load, lams), color="tab:orange", label="area of H")
-        ax2.set_ylabel(r"area of $\mathcal{H}(\lambda)$", color="tab:orange")
+        ax2.plot(lams, region_curve(system, load, lams), color="tab:orange",
+                 label=r"area of $\mathcal{H}(\lambda)$")
+        ax2.set_ylabel(rf"area of $\mathcal{{H}}(\lambda)$ {_unit(units, 'length', 2)}",
+                       color="tab:orange")
         ax2.set_ylim(bottom=0)
         ax.right_ax = ax2
         lines = ax.get_legend_handles_labels()

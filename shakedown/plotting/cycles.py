@@ -130,6 +130,38 @@ def _steady_frame(run, needs=("t", "node", "slip", "q", "p", "state")):
     return table
 
 
+_MAX_CURVES = 10
+
+
+def _same_curves(tab, nodes) -> list[list[int]]:
+    """The nodes grouped by identical (slip, q, p) histories, each group sorted, to the
+    round-off of the table's own scales (1e-9 of the largest slip and reaction)."""
+    wide = tab[tab["node"].isin(nodes)].pivot_table(index="node", columns="t",
+                                                    values=["slip", "q", "p"], aggfunc="last")
+    scales = [max(float(np.nanmax(np.abs(wide[c].to_numpy(float)), initial=0.0)), 1e-300)
+              for c in ("slip", "q", "p")]
+    rows = np.hstack([wide[c].to_numpy(float) / sc for c, sc in zip(("slip", "q", "p"),
+                                                                      scales, strict=True)])
+    groups, keys = [], []
+    for j, row in zip(wide.index.to_numpy(int), rows, strict=True):
+        for g, key in zip(groups, keys, strict=True):
+            if np.allclose(row, key, rtol=0, atol=1e-9, equal_nan=True):
+                g.append(int(j))
+                break
+        else:
+            groups.append([int(j)])
+            keys.append(row)
+    return groups
+
+
+def _nodes_label(group) -> str:
+    """``node 7`` or ``nodes 7, 54`` (numbered from 1)."""
+    names = [str(j + 1) for j in group]
+    if len(names) == 1:
+        return f"node {names[0]}"
+    return "nodes " + (", ".join(names) if len(names) <= 4 else f"{names[0]}, ..., {names[-1]}")
+
+
 def plot_steady_cycle(run, ax=None, *, nodes=None, units=None):
     """Slips (top) and reactions ``q`` (solid), ``p`` (dashed) (bottom) over the steady cycle.
 
@@ -139,8 +171,10 @@ def plot_steady_cycle(run, ax=None, *, nodes=None, units=None):
         Anything with a ``steady_table`` (columns ``t, node, slip, q, p``), or that table.
     ax : sequence of two Axes, optional
     nodes : sequence of int, optional
-        Nodes to draw (0-based, as in the table; all by default, the first 10 when there are
-        more than 10).  Legends number nodes from 1.
+        Nodes to draw (0-based, as in the table; all by default).  Nodes whose slips and
+        reactions coincide over the cycle (mirror nodes of a symmetric model) are drawn as one
+        curve named after all of them; of more than 10 curves, the 10 that slip most in contact
+        are drawn.  Legends number nodes from 1.
     units : dict, optional
         ``{"force": ..., "length": ...}`` for the axis labels.
 
@@ -150,28 +184,32 @@ def plot_steady_cycle(run, ax=None, *, nodes=None, units=None):
     """
     tab = _steady_frame(run)
     all_nodes = np.unique(tab["node"].to_numpy(int))
+    nodes = all_nodes if nodes is None else np.asarray(nodes, int)
+    groups = _same_curves(tab, nodes)  # nodes whose curves coincide (a symmetric model) share one
     subset = ""
-    if nodes is None and all_nodes.size > 10:
-        # the 10 nodes that slip most while in contact (stuck nodes are flat lines, and the
+    if len(groups) > _MAX_CURVES:
+        # the 10 curves that slip most while in contact (stuck nodes are flat lines, and the
         # slip of an open node moves without friction or reactions)
         contact = tab[tab["state"].astype(str).isin(["forward", "backward", "stick"])]
         slipping = contact if len(contact) else tab
         swing = slipping.groupby("node")["slip"].agg(lambda x: float(x.max() - x.min()))
-        nodes = np.sort(swing.sort_values(ascending=False).index.to_numpy(int)[:10])
-        subset = f" (the 10 of {all_nodes.size} nodes that slip most in contact)"
-    nodes = all_nodes if nodes is None else np.asarray(nodes, int)
+        groups = sorted(groups, key=lambda g: -swing.get(g[0], 0.0))[:_MAX_CURVES]
+        groups = sorted(groups)
+        n_shown = sum(len(g) for g in groups)
+        subset = f" (the {n_shown} of {all_nodes.size} nodes that slip most in contact)"
     if ax is None:
         fig, ax = _plt().subplots(2, 1, sharex=True, figsize=(6.4, 5.6))
     ax = np.asarray(ax).ravel()
     if ax.size != 2:
         raise InputError(f"plot_steady_cycle needs two axes; got {ax.size}")
     colours = _plt().rcParams["axes.prop_cycle"].by_key()["color"]
-    for i, j in enumerate(nodes):
-        sub = tab[tab["node"] == j].sort_values("t")
+    for i, group in enumerate(groups):
+        sub = tab[tab["node"] == group[0]].sort_values("t")
         c = colours[i % len(colours)]
-        ax[0].plot(sub["t"], sub["slip"], color=c, label=f"node {j + 1}")
-        ax[1].plot(sub["t"], sub["q"], color=c, label=f"q node {j + 1}")
-        ax[1].plot(sub["t"], sub["p"], color=c, ls="--", label=f"p node {j + 1}")
+        name = _nodes_label(group)
+        ax[0].plot(sub["t"], sub["slip"], color=c, label=name)
+        ax[1].plot(sub["t"], sub["q"], color=c, label=f"q {name}")
+        ax[1].plot(sub["t"], sub["p"], color=c, ls="--", label=f"p {name}")
     ax[0].set_ylabel(f"slip v {_unit(units, 'length')}")
     ax[1].set_ylabel(f"q (solid), p (dashed) {_unit(units, 'force')}")
     ax[0].set_title("steady cycle" + subset, fontsize=10)
@@ -226,14 +264,16 @@ def plot_uniqueness(study, ax=None, *, units=None):
     """Steady ``W`` of every initial state of a :class:`~shakedown.steady.UniquenessStudy`.
 
     Runs that shook down are drawn as open circles, runs in cyclic slip as dots, runs that did
-    not reach a steady cycle as crosses at ``W = 0``.
+    not reach a steady cycle as crosses at ``W = 0``.  Initial states are numbered from 1 (state
+    1 is the zero slip; the study's table numbers them from 0).
     """
     tab = getattr(study, "table", study)
     if not hasattr(tab, "columns") or "steady_dissipation" not in tab.columns:
         raise InputError("plot_uniqueness needs a UniquenessStudy or its table")
     ax = _new_ax(ax)
     W = tab["steady_dissipation"].to_numpy(float)
-    i = tab["state"].to_numpy(int) if "state" in tab else np.arange(len(tab))
+    # initial states numbered from 1 as in everything a person reads (the table is 0-based)
+    i = (tab["state"].to_numpy(int) if "state" in tab else np.arange(len(tab))) + 1
     sd_ = tab["shook_down"].to_numpy(bool)
     ok = np.isfinite(W)
     if (ok & sd_).any():  # a legend entry only for what is drawn
@@ -250,7 +290,9 @@ def plot_uniqueness(study, ax=None, *, units=None):
     top = top if top > 0 else 1.0
     ax.set_ylim(-0.05 * top, 1.15 * top)  # markers at W = 0 drawn whole
     ax.ticklabel_format(axis="y", useOffset=False)
-    ax.set_xlabel("initial state (0: zero slip)")
+    cols = [c for c in tab.columns if str(c).startswith("initial_slip_")]
+    zero = bool(cols) and np.allclose(tab[cols].to_numpy(float)[np.argmin(i)], 0.0)
+    ax.set_xlabel(f"initial state{f' ({i.min()}: zero slip)' if zero else ''}")
     ax.set_ylabel(f"steady W per cycle {_unit(units, 'energy')}")
     ax.set_title("steady dissipation from each initial state", fontsize=10)
     ax.legend(fontsize="small")

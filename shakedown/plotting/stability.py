@@ -66,7 +66,7 @@ def plot_lam_mu(curves, ax=None, *, mu=None, growth=None, show_support=True, mu_
     if growth is not None and growth.lam.size:
         ax.plot(np.full(growth.lam.size, growth.mu), growth.lam, "ko", ms=5,
                 label=f"growth rates at mu = {growth.mu:.4g}")
-    ax.set_xlabel("friction coefficient mu")
+    ax.set_xlabel("friction coefficient mu [-]")
     ax.set_ylabel("growth rate s [1/time]")
     ax.set_ylim(bottom=0)
     ax.set_title("divergence growth rates s(mu) (MCEIP branches)", fontsize=10)
@@ -107,7 +107,7 @@ def plot_mode(result, coordinates=None, ax=None, *, label=None):
         ax.plot([], [], " ", label="every slip node slips in the mode (no unloading)")
     ax.axhline(0, color="0.6", lw=0.6)
     ax.set_xlabel(xlabel)
-    ax.set_ylabel("mode shape (dimensionless)")
+    ax.set_ylabel("mode shape [-]")
     title = f"critical mode at mu* = {result.mu:.4g}"
     if result.lam > 0:
         title += f", growth rate s = {result.lam:.4g}"
@@ -124,7 +124,7 @@ def plot_power_history(result, ax=None, *, reference=None):
     if reference is not None:
         ax.axhline(reference, color="r", ls="--", lw=0.8, label=f"reference {reference:.5g}")
     ax.set_xlabel("iteration n")
-    ax.set_ylabel("mu_n")
+    ax.set_ylabel("mu_n [-]")
     ax.legend(fontsize=7)
     return ax
 
@@ -136,7 +136,7 @@ def plot_convergence(n_per_edge, mu_h, ax=None, *, reference=None, label="mu*_h"
     if reference is not None:
         ax.axhline(reference, color="r", ls="--", lw=0.8, label=f"reference {reference:g}")
     ax.set_xlabel("nodes per edge")
-    ax.set_ylabel("critical friction mu*_h")
+    ax.set_ylabel("critical friction mu*_h [-]")
     ax.legend(fontsize=7)
     return ax
 
@@ -149,7 +149,7 @@ def plot_cycle_margin(cycle_stability, ax=None):
     ax.step(tab["t"], a, where="post", label="alpha* = mu* / f")
     ax.plot(tab["t"], a, "o", ms=3)
     ax.axhline(1.0, color="r", ls="--", lw=0.8, label="actual friction")
-    ax.set_xlabel("t (cycles)")
-    ax.set_ylabel("critical friction factor")
+    ax.set_xlabel("t [cycles]")
+    ax.set_ylabel("critical friction factor alpha* [-]")
     ax.legend(fontsize=7)
     return ax

@@ -7,6 +7,9 @@ import numpy as np
 __all__ = ["plot_sweep", "plot_fractions"]
 
 
+_XLABEL = {"lam": r"load factor $\lambda$ [-]", "x": r"$\lambda / \lambda_2$ [-]"}
+
+
 def _axes(ax, size=(7, 4.5)):
     if ax is None:
         import matplotlib.pyplot as plt
@@ -24,29 +27,48 @@ def _col(axis):
 
 
 def _mark_bounds(ax, result, axis):
-    """The band lam1..lam2 shaded; lam_adj (dash-dot) and lam_u (dotted) marked."""
+    """``lam1`` (dotted) and ``lam2`` (dashed) marked with their values, the band between them
+    shaded; ``lam_adj`` (dash-dot) and ``lam_u`` (dash-dot-dot) marked with their values.
+
+    Values are the mean over the realisations (said when there are several); on the axis
+    ``lam / lam2`` the marks are at each bound over that realisation's ``lam2``.
+    """
     r = result.realisations
     l2 = r["lam2"].to_numpy(float)
     scale = l2 if axis == "x" else np.ones_like(l2)
     n = len(r)
 
-    def val(col):
-        x = r[col].to_numpy(float) / scale if col in r else np.full(n, np.nan)
-        return x[np.isfinite(x)]
+    def where_and_value(col):
+        raw = r[col].to_numpy(float) if col in r else np.full(n, np.nan)
+        x, ok = raw / scale, np.isfinite(raw / scale)
+        return (x[ok].mean(), raw[ok].mean()) if ok.any() else (np.nan, np.nan)
 
-    l1v, l2v = val("lam1"), val("lam2")
     mean = " (mean)" if n > 1 else ""
-    if l1v.size and l2v.size:
-        ax.axvspan(l1v.mean(), l2v.mean(), color="0.6", alpha=0.35, lw=0,
-                   label=rf"band $\lambda_1$ .. $\lambda_2${mean} (bounds)")
-    adj = val("lam_adj")
-    if adj.size and l1v.size and adj.mean() < l1v.mean():
-        ax.axvline(adj.mean(), color="k", ls="-.", lw=1,
-                   label=rf"$\lambda_{{adj}}$ = {adj.mean():.3g}{mean}")
-    lu = val("lam_u")
-    if lu.size:
-        ax.axvline(lu.mean(), color="k", ls=":", lw=1.3,
-                   label=rf"$\lambda_u$ = {lu.mean():.3g}{mean}: every crack slips")
+
+    def at(x):  # where the mark is, on the axis lam / lam2
+        return rf", at $\lambda/\lambda_2$ = {x:.3g}" if axis == "x" else ""
+
+    x1, v1 = where_and_value("lam1")
+    x2, v2 = where_and_value("lam2")
+    if np.isfinite(x1) and np.isfinite(x2) and abs(v2 - v1) <= 1e-7 * abs(v2):
+        ax.axvline(x2, color="k", ls="--", lw=1,
+                   label=rf"$\lambda_1 = \lambda_2$ = {v2:.4g}{mean}{at(x2)}")
+    else:
+        if np.isfinite(x1) and np.isfinite(x2):
+            ax.axvspan(x1, x2, color="0.6", alpha=0.35, lw=0,
+                       label=r"$\lambda_1 < \lambda < \lambda_2$: the initial state decides")
+        if np.isfinite(x1):
+            ax.axvline(x1, color="k", ls=":", lw=1.2, label=rf"$\lambda_1$ = {v1:.4g}{mean}{at(x1)}")
+        if np.isfinite(x2):
+            ax.axvline(x2, color="k", ls="--", lw=1, label=rf"$\lambda_2$ = {v2:.4g}{mean}{at(x2)}")
+    xa, va = where_and_value("lam_adj")
+    if np.isfinite(xa) and np.isfinite(x1) and xa < x1:
+        ax.axvline(xa, color="tab:purple", ls="-.", lw=1,
+                   label=rf"$\lambda_{{adj}}$ = {va:.4g}{mean}{at(xa)}")
+    xu, vu = where_and_value("lam_u")
+    if np.isfinite(xu):
+        ax.axvline(xu, color="tab:brown", ls=(0, (5, 2, 1, 2, 1, 2)), lw=1.2,
+                   label=rf"$\lambda_u$ = {vu:.4g}{mean}{at(xu)}: every crack slips")
 
 
 def _zoom_range(result, col):
@@ -89,7 +111,8 @@ def _inset(ax, result, col, alpha):
     top = float(np.nanmax(sub["W_star_max"].to_numpy(float)))
     ins.set_ylim(-0.05 * top if top > 0 else -1, 1.1 * top if top > 0 else 1)
     ins.tick_params(labelsize=6)
-    ins.set_title(r"zoom: $\lambda_{adj}$ .. $\lambda_2$", fontsize=7)
+    ins.text(0.03, 0.95, r"zoom: $\lambda_{adj}$ .. $\lambda_2$", transform=ins.transAxes,
+             fontsize=7, va="top", bbox={"facecolor": "white", "edgecolor": "none", "pad": 1})
 
 
 def plot_sweep(result, ax=None, *, axis: str = "lam", bands: bool = True,
@@ -98,9 +121,10 @@ def plot_sweep(result, ax=None, *, axis: str = "lam", bands: bool = True,
 
     One realisation: the maximum (open circles, solid line) and the minimum (filled triangles,
     dashed line) over the initial states at each load factor, the band ``lam1 .. lam2`` shaded,
-    ``lam_adj`` and ``lam_u`` marked.  Several: each realisation's points faintly, and the mean
-    over realisations of min and max at the points common to all (same ``lam / lam2``) with
-    their confidence bands (``result.bands``).
+    ``lam1``, ``lam2``, ``lam_adj`` and ``lam_u`` marked with their values in the legend.
+    Several: each realisation's points faintly, and the mean over realisations of min and max
+    at the points common to all (same ``lam / lam2``) with their confidence bands
+    (``result.bands``).
 
     Parameters
     ----------
@@ -133,16 +157,16 @@ def plot_sweep(result, ax=None, *, axis: str = "lam", bands: bool = True,
                 ax.fill_between(b[col], b[f"{c}_lo"], b[f"{c}_hi"], color=color, alpha=0.2,
                                 lw=0, label=f"{level:.0%} confidence of the mean ({name})")
     _mark_bounds(ax, result, col)
-    ax.set_xlabel(r"load factor $\lambda$" if col == "lam" else r"$\lambda / \lambda_2$")
-    ax.set_ylabel(r"$W^* = W\mu / (4(1-\nu)p_0^2\bar a^2)$ per cycle")
+    ax.set_xlabel(_XLABEL[col])
+    ax.set_ylabel(r"$W^* = W\mu / (4(1-\nu)p_0^2\bar a^2)$ per cycle [-]")
     ax.set_ylim(bottom=min(0.0, ax.get_ylim()[0]))
     spec = getattr(result, "spec", None)
     if spec is not None:
+        reals = (f"{spec.n_realisations} realisations x " if spec.n_realisations != 1 else "")
         ax.set_title(f"Steady dissipation: {spec.n_cracks} cracks, density {spec.density}, "
-                     f"f = {spec.friction}, {spec.n_realisations} realisation(s) x "
-                     f"{spec.n_states} initial states", fontsize=9)
-    # W* grows from the lower left to the upper right: the lower right is free for the legend
-    ax.legend(fontsize=7, loc="lower right")
+                     f"f = {spec.friction}, {reals}{spec.n_states} initial states", fontsize=9)
+    # beside the axes: the curves, the marks and the zoom stay uncovered
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0)
     if zoom:
         _inset(ax, result, col, alpha if n_real > 1 else 1.0)
     return ax
@@ -172,10 +196,10 @@ def plot_fractions(result, ax=None, *, axis: str = "lam"):
                         label=f"{ext} over initial states: fraction that {what}s"
                         if k == 0 else None)
     _mark_bounds(ax, result, col)
-    ax.set_xlabel(r"load factor $\lambda$" if col == "lam" else r"$\lambda / \lambda_2$")
-    ax.set_ylabel("fraction of cracks (steady cycle)")
+    ax.set_xlabel(_XLABEL[col])
+    ax.set_ylabel("fraction of cracks (steady cycle) [-]")
     ax.set_ylim(-0.02, 1.02)
     ax.set_title("Cracks that slip / open in the steady cycle"
                  + (f" ({n_real} realisations)" if n_real > 1 else ""), fontsize=9)
-    ax.legend(fontsize=7, loc="upper left")
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0)
     return ax

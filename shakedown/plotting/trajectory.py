@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..model.errors import InputError
-from .axes import _new_ax, _plt, _unit
+from .axes import OUTSIDE, SAFE_REGION, SEED_ORDER, _new_ax, _plt, _unit, constraint_style, frame_lines
 
 
 def _lines(system, load, lam, times):
@@ -56,9 +56,11 @@ def plot_trajectory(system, load, lam: float, trajectories=None, ax=None, *, spa
                     units=None):
     """Two-node state trajectories over the moving constraint lines (seed 002 Figs. 2-8).
 
-    The constraint lines are ``G_k . v = b_k`` with ``G = [A - F B^T; -(A + F B^T)]`` (MODEL.md
-    s.3: ``I_j``, then ``II_j``); in ``tau = A v`` space they are ``G_k A^-1 tau = b_k`` (for
-    ``B = 0`` perpendicular to the axes, seed 002 Fig. 7).
+    The constraint lines are ``G_k . v = b_k`` with ``G = [A - F B^T; -(A + F B^T)]``
+    (conventions, section 3: ``I_j``, then ``II_j``), named and coloured as in
+    :func:`~shakedown.plotting.bounds.plot_constraints_2d`; in ``tau = A v`` space they are
+    ``G_k A^-1 tau = b_k`` (for ``B = 0`` perpendicular to the axes, seed 002 Fig. 7).  The view
+    box frames the trajectories, the safe region and a stretch of every extreme line.
 
     Parameters
     ----------
@@ -131,19 +133,23 @@ def plot_trajectory(system, load, lam: float, trajectories=None, ax=None, *, spa
     lo, hi = allp.min(axis=0), allp.max(axis=0)
     pad = 0.15 * max(float(np.max(hi - lo)), 1e-12)
     lo, hi = lo - pad, hi + pad
+    outside = set()
+    if extremes:  # every extreme line named in the legend crosses the picture, or says not
+        lo, hi, outside = frame_lines(Gs, b_ext, lo, hi)
     if shade_safe and len(poly) >= 3:
         P = poly @ T.T
-        ax.fill(P[:, 0], P[:, 1], color="0.85", zorder=0, label="safe region H")
-    # seed 002 numbering: I, II for node 0 (rows 0, 2), III, IV for node 1 (rows 1, 3)
-    names = ["I (I_1)", "III (I_2)", "II (II_1)", "IV (II_2)"]
-    styles = ["C3", "C0", "C1", "C2"]
-    for k in range(4):
+        ax.fill(P[:, 0], P[:, 1], color="0.85", zorder=0, label=SAFE_REGION)
+    for k in SEED_ORDER:  # seed 002 order I, II (node 1), III, IV (node 2)
+        colour, name = constraint_style(k)
         offs = ([b_ext[k]] if extremes else []) + [b[k] for b in b_inst]
         for i, b in enumerate(offs):
             dashed = extremes and i == 0
-            _axline(ax, Gs[k], b, color=styles[k], ls="--" if dashed else "-",
-                    lw=1.0 if dashed else 0.6, alpha=1.0 if dashed else 0.5,
-                    label=f"{names[k]} extreme" if dashed else None)
+            if dashed and k in outside:
+                ax.plot([], [], "--", color=colour, lw=1.2, label=name + OUTSIDE)
+                continue
+            _axline(ax, Gs[k], b, color=colour, ls="--" if dashed else "-",
+                    lw=1.2 if dashed else 0.6, alpha=1.0 if dashed else 0.5,
+                    label=name if dashed else None)
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
     if space == "v":
@@ -152,7 +158,8 @@ def plot_trajectory(system, load, lam: float, trajectories=None, ax=None, *, spa
     else:
         ax.set_xlabel(rf"$\tau_1 = (A v)_1$ {_unit(units, 'force')}")
         ax.set_ylabel(rf"$\tau_2 = (A v)_2$ {_unit(units, 'force')}")
-    ax.legend(fontsize="small")
+    # beside the axes: the lines and the region stay uncovered
+    ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0)
     return ax
 
 

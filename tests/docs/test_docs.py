@@ -75,3 +75,41 @@ def test_benchmark_headlines_come_from_the_results_files(built_docs):
     text = (html_dir / "generated" / "benchmarks.html").read_text()
     for res in sorted((ROOT / "benchmarks").glob("RESULTS_*.md")):
         assert res.name in text
+
+
+def _pages(html_dir):
+    return sorted(p for p in html_dir.rglob("*.html") if "_static" not in p.parts
+                  and "_modules" not in p.parts)
+
+
+def test_pages_load_nothing_from_the_network_and_math_has_its_local_mathjax(built_docs):
+    """Offline reading (issue 25: MathJax came from a CDN, so every formula showed as raw LaTeX
+    without a network).  Every script a page loads is a file of the build; a page with math
+    loads MathJax from ``_static/mathjax``."""
+    _, html_dir = built_docs
+    with_math = []
+    for page in _pages(html_dir):
+        text = page.read_text()
+        for src in re.findall(r"<script[^>]*\ssrc=\"([^\"]+)\"", text):
+            assert not re.match(r"^(https?:)?//", src), f"{page.name} loads {src} from the network"
+            assert (page.parent / src.split("?")[0]).is_file(), f"{page.name}: {src} missing"
+        if 'class="math' in text:
+            with_math.append(page.relative_to(html_dir).as_posix())
+            assert re.search(r"<script[^>]*src=\"[^\"]*_static/mathjax/tex-chtml\.js", text), page
+    assert "conventions.html" in with_math and "notebooks/04_monte_carlo.html" in with_math
+    fonts = html_dir / "_static" / "mathjax" / "output" / "chtml" / "fonts" / "woff-v2"
+    assert any(fonts.glob("*.woff")), "MathJax fonts not copied"
+
+
+def test_no_page_shows_raw_latex_outside_math(built_docs):
+    """TeX outside the math elements MathJax typesets (a ``$...$`` that was not parsed as math,
+    say) would show raw: none outside code."""
+    _, html_dir = built_docs
+    for page in _pages(html_dir):
+        text = page.read_text()
+        body = text[text.find("<article"):text.rfind("</article>")] if "<article" in text else ""
+        body = re.sub(r"<(span|div) class=\"math[^\"]*\">.*?</\1>", "", body, flags=re.S)
+        body = re.sub(r"<(pre|code|script|style)[^>]*>.*?</\1>", "", body, flags=re.S)
+        body = html.unescape(re.sub(r"<[^>]+>", "", body))
+        raw = re.findall(r"\$\$|\$[^$\n]*\\(?:lambda|frac|mu|bar|cos|sin|pi)\b[^$\n]*\$|\\\[|\\begin\{", body)
+        assert not raw, f"{page.relative_to(html_dir)}: raw LaTeX {raw[:3]}"

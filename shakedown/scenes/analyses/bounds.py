@@ -78,8 +78,9 @@ def _plots(ctx, b, options):
 
     from ...plotting.bounds import plot_constraints_2d, plot_region_vs_lam
 
+    units = ctx.scene.units if getattr(ctx, "scene", None) is not None else None
     fig, ax = plt.subplots(figsize=(7, 4))
-    plot_region_vs_lam(b, system=ctx.system, load=ctx.load, ax=ax)
+    plot_region_vs_lam(b, system=ctx.system, load=ctx.load, ax=ax, units=units)
     ctx.output.save_figure("bounds_vs_lam.png", fig)
     if ctx.system.n_nodes != 2:
         return
@@ -89,5 +90,8 @@ def _plots(ctx, b, options):
     ]
     for i, x in enumerate(dict.fromkeys(lams)):
         fig, ax = plt.subplots(figsize=(5.5, 5))
-        plot_constraints_2d(ctx.system, ctx.load, x, ax=ax)
+        # mark the reported safe state (none when no state is safe)
+        at_safe = np.size(b.safe_state) == 2 and np.isfinite(b.safe_state).all() and x == b.safe_lam
+        plot_constraints_2d(ctx.system, ctx.load, x, ax=ax, units=units,
+                            state=b.safe_state if at_safe else None, state_label="safe state")
         ctx.output.save_figure(f"safe_region_{i}.png", fig)

@@ -13,6 +13,10 @@ MCEIP-mu for the critical friction ``mu*`` and its mode, and, when ``growth_rate
 the model has a mass (an FE scene condensed with ``mass = true``), the branches ``s(mu)`` with
 their returning points and the growth rates at ``mu``.  Writes ``stability.json``,
 ``partition.csv``, ``mode.csv``, ``curves.csv`` and the plots ``mode.png``, ``growth_rates.png``.
+``mode.csv`` has per slip node (numbered from 1) its direction ``chi``, ``slip_mode`` (the mode
+``x = chi v'``, the node's slip along its slip direction, scaled to ``max |x| = 1``) and
+``cone_unloading`` (``y = chi q' + mu* p'``, how fast the node leaves its friction cone; 0 where
+it slips in the mode).
 Its result starts with a verdict ("stable: friction 0.5 is below mu* = 1.955").  The growth
 rate is called ``lam`` in the Python API (:func:`shakedown.stability.growth_rates`) and ``s``
 (``growth_rate``) in everything this analysis prints or writes; ``lam`` stays the load factor.
@@ -165,7 +169,8 @@ def run(ctx, options: dict) -> dict:
     }
     if res.found:
         ctx.output.write_table("mode.csv", pd.DataFrame(
-            {"node": np.asarray(res.nodes) + 1, "chi": res.chi, "x": res.mode, "y": res.y}))
+            {"node": np.asarray(res.nodes) + 1, "chi": res.chi, "slip_mode": res.mode,
+             "cone_unloading": res.y}))
     figs = {}
     growth = None
     if options["growth_rate_max"] > 0:
