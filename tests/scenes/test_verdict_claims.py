@@ -143,3 +143,19 @@ def test_messages_number_nodes_and_matrix_entries_from_1():
                                                    "column 1 is -0.3|A row 2, column 1"):
         sd.DiscreteSystem([[1.0, 0.3], [-0.3, 1.0]], COUPLED["B"], COUPLED["C"], 0.5)
     assert position((0, 1)) == "row 1, column 2" and position(4) == "entry 5"
+
+
+def test_cycles_analysis_follows_its_own_advice(tmp_path):
+    # the command asks the exact load's bounds when the run cannot decide (issue 25)
+    import json
+
+    from shakedown.scenes.cli import main
+
+    lam = sd.shakedown_bounds(coupled(0.7), LOAD).lam2 * (1 + 1e-5)
+    out = tmp_path / "o"
+    rc = main(["cycles", "two_node_coupled", "-q", "-o", str(out), "--set", f"lam={lam!r}",
+               "--set", "initial_slip=[0.3, 0.3]", "--set", "plots=false"])
+    assert rc == 0
+    v = json.loads((out / "cycles.json").read_text())["verdict"]
+    assert "The bounds of the exact load decide it: lam > lam2 = 1.291" in v
+    assert "raise steps_per_cycle" not in v
