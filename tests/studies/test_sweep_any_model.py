@@ -53,6 +53,9 @@ def test_sweep_runs_for_every_model_kind(tmp_path, scene, sets):
     assert (out / "dissipation_vs_lam.png").stat().st_size > 0
     data = json.loads((out / "sweep.json").read_text())
     assert data["spec"]["source"]["n_nodes"] >= 1 and len(data["spec"]["source"]["digest"]) == 64
+    assert {r["realisation"] for r in data["summary"] + data["realisations"]} == {1}
+    summary = pd.read_csv(out / "sweep_summary.csv")
+    assert set(summary["realisation"]) == {1}
 
 
 def test_listed_sweep_agrees_with_direct_runs_and_bounds(tmp_path):
@@ -122,6 +125,21 @@ def test_system_source_is_keyed_on_content_and_a_changed_model_is_not_resumed(tm
     assert res.realisations["lam1"].iloc[0] == pytest.approx(1.0, rel=1e-7)
     w = res.runs.groupby("lam")["W"].max()
     assert w.loc[0.5] == 0 and w.loc[1.5] > 0
+    # the figure of a given system: W in its unit, the model named, nodes (not cracks)
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from shakedown.plotting.sweep import plot_fractions
+
+    ax = res.plot()
+    assert ax.get_ylabel() == "$W$ per cycle [force x length]"
+    assert "the model 'one' (1 node)" in ax.get_title()
+    assert "every node slips" in " ".join(t.get_text() for t in ax.get_legend().get_texts()) \
+        or not np.isfinite(res.realisations["lam_u"]).any()
+    assert plot_fractions(res).get_ylabel() == "fraction of nodes (steady cycle)"
+    plt.close("all")
     with pytest.raises(InputError, match="another spec"):
         run_sweep(SweepSpec(source=c, lams=(0.5, 1.5), n_states=2, steps_per_cycle=16),
                   tmp_path / "store", n_workers=1, progress=False)

@@ -186,7 +186,11 @@ def run(ctx, options: dict) -> dict:
     ctx.output.write_table("sweep_realisations.csv",
                            _from_one(res.realisations.drop(columns="safe_state")))
     ctx.output.write_table("sweep_bands.csv", res.bands)
-    ctx.output.write_json("sweep.json", res.to_dict())
+    digest = res.to_dict()
+    for key in ("realisations", "summary", "regions"):  # numbered from 1, as the CSV tables
+        digest[key] = [{**r, **{c: int(r[c]) + 1 for c in ("realisation", "state") if c in r}}
+                       for r in digest[key]]
+    ctx.output.write_json("sweep.json", digest)
     write_atomic(ctx.output.path / "sweep_verdict.txt", (res.verdict + "\n").encode())
     D = spec.dissipation_name
     unit = f" {spec.source.energy_unit}" if spec.source is not None else ""
