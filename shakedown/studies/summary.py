@@ -161,8 +161,8 @@ def verdict(spec, realisations: pd.DataFrame, summary: pd.DataFrame, lamu: pd.Da
         parts.append(
             f"By the bounds (computed, LP certificates), the initial state decides whether the "
             f"system shakes down for lam1 = {stat(l1)} < lam < lam2 = {stat(l2)} (lam1/lam2 = "
-            f"{stat(l1 / l2, 3)}): there min {D} = {sig(wb_min, 3)}{unit} and max {D} up to "
-            f"{sig(wb_max, 3)}{unit} ({_plural(len(band), 'load factor')} of this study).")
+            f"{stat(l1 / l2, 3)}): there min {D} = {sig(wb_min)}{unit} and max {D} up to "
+            f"{sig(wb_max)}{unit} ({_plural(len(band), 'load factor')} of this study).")
     else:
         status = ", ".join(sorted(set(realisations["bounds_status"].astype(str))))
         parts.append(f"The bounds are undefined for this model (status {status}; shakedown "

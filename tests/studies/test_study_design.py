@@ -180,7 +180,7 @@ def test_verdict_states_the_band_cyclic_slip_below_lam1_and_lam_u():
     lu = lam_u(s)
     text = verdict(SweepSpec(), rel, s, lu, regions(s, lu))
     # 4 significant digits with trailing zeros, ratios 3 (issue 25)
-    assert "lam1 = 1.000 < lam < lam2 = 2.000" in text and "max W* up to 0.300" in text
+    assert "lam1 = 1.000 < lam < lam2 = 2.000" in text and "max W* up to 0.3000" in text
     assert "from lam = 0.8000 (lam/lam2 = 0.400) to 3.000 (lam/lam2 = 1.50)" in text
     assert "Below lam1, 1 of 8 runs ended in cyclic slip" in text
     assert "between lam_adj = 0.5000 and lam1: 1 of 4" in text
