@@ -83,3 +83,26 @@ def test_sweep_result_repr_and_verdict(tmp_path, n_states):
     res = run_sweep(spec, tmp_path / "store", n_workers=1, progress=False)
     assert "model=\"the model 'coupled' (2 nodes)\"" in _short(res, "SweepResult")
     assert res.verdict() == res.verdict and res.verdict().startswith("The model 'coupled'")
+
+
+def test_growth_rates_and_cycle_stability_repr_and_verdict():
+    import pandas as pd
+
+    from shakedown.stability import CycleStability
+    from shakedown.stability.growth import GrowthRates
+
+    g = GrowthRates(mu=0.8, lam=np.array([0.25, 1.5]), modes=(), branch=np.array([0, 1]),
+                    curves=None, status="found", message="")
+    assert "n_rates=2" in _short(g, "GrowthRates") and "max_rate=1.500" in repr(g)
+    assert g.verdict().startswith("At friction 0.8000 the largest growth rate is s = 1.500 "
+                                  "[1/time] (2 rates")
+    none = GrowthRates(mu=0.8, lam=np.zeros(0), modes=(), branch=np.zeros(0, int), curves=None,
+                       status="none", message="")
+    assert "no growth rate was found" in none.verdict()
+    t = pd.DataFrame({"t": [0.0, 0.25, 0.5], "unstable": [False, True, True]})
+    cs = CycleStability(table=t, results=(), min_margin=-0.2)
+    assert "n_snapshots=3" in _short(cs, "CycleStability")
+    assert cs.verdict().startswith("Unstable during the cycle: the smallest margin alpha* - 1 = "
+                                   "-0.2000 <= 0, first at t = 0.2500")
+    ok = CycleStability(table=t.assign(unstable=False), results=(), min_margin=0.5)
+    assert ok.verdict().startswith("Stable at all 3 snapshots")
