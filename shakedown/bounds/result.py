@@ -180,6 +180,13 @@ class ShakedownBounds:
             "n_nodes": int(self.n_nodes),
         }
 
+    def __repr__(self) -> str:
+        from ..model.results import short_repr
+
+        return short_repr(self, ("status", "lam1", "lam2", "lam_adj", "lam_separation",
+                                 "safe_lam", "n_lps"),
+                          {"n_nodes": self.n_nodes, "limiting": self.limiting_label or "-"})
+
     def verdict(self) -> str:
         """The answer in plain sentences, numbers rounded for reading (:mod:`.verdict`)."""
         from .verdict import bounds_verdict

@@ -12,19 +12,24 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..model.numbers import sig
+from ..model.results import bounds_claim
+
 #: Two load factors closer than this (relative) are reported as equal; the LP answers are
 #: accurate to HiGHS's feasibility tolerance 1e-7 (``engine.LAM_RTOL``).
 SAME_RTOL = 1e-7
 
 
 def fmt(x: float, digits: int = 4) -> str:
-    """A number for reading: ``digits`` significant digits; ``inf``/``nan`` spelled out."""
-    x = float(x)
-    if np.isnan(x):
-        return "nan"
-    if np.isinf(x):
-        return "inf" if x > 0 else "-inf"
-    return f"{x:.{digits}g}"
+    """A number for reading: ``digits`` significant digits, trailing zeros kept
+    (:func:`shakedown.model.numbers.sig`); ``inf``/``nan`` spelled out."""
+    return sig(x, digits)
+
+
+def every_state_status(b) -> tuple[bool, str]:
+    """Whether "shakes down from every initial state for lam < lam1" is proved for ``b``'s
+    system, and the words for its status (:func:`shakedown.model.results.bounds_claim`)."""
+    return bounds_claim(b)
 
 
 def _same(a: float, b: float) -> bool:
@@ -73,10 +78,11 @@ def bounds_verdict(b, adjacency: bool = False) -> str:
     >>> s = sd.DiscreteSystem([[1.0]], [[0.0]], [[1.0]], friction=0.5)
     >>> load = sd.LoadCycle.from_harmonics([0.0], [2.0], q_cos=[1.0])
     >>> print(bounds_verdict(sd.shakedown_bounds(s, load)))  # doctest: +ELLIPSIS
-    Shakes down from every initial state for lam < lam1 = lam2 = 1; never above ...
+    Shakes down from every initial state for lam < lam1 = lam2 = 1.000 (proved for one ...
     """
     lam1, lam2, lam_adj = float(b.lam1), float(b.lam2), float(b.lam_adj)
     n = b.n_nodes
+    proved, status = every_state_status(b)
     q0, fp0, p0 = _static_load(b)
     scale = max(float(np.max(np.abs(np.concatenate([q0, p0])), initial=0.0)), 1e-300)
     tensile = p0 < -1e-12 * scale  # relative to the static load's own size
@@ -105,13 +111,14 @@ def bounds_verdict(b, adjacency: bool = False) -> str:
         out.append(f"Shakes down at every load factor: {why}, so lam2 = inf"
                    + (" and lam1 = inf." if np.isinf(lam1) else f"; lam1 = {fmt(lam1)}."))
     elif _same(lam1, lam2):
-        out.append(f"Shakes down from every initial state for lam < lam1 = lam2 = {fmt(lam1)}; "
-                   "never above (cyclic slip from every initial state): the initial state "
-                   "never decides.")
-    elif np.isfinite(lam_adj) and lam_adj < lam1 and not _same(lam_adj, lam1):
+        out.append(f"Shakes down from every initial state for lam < lam1 = lam2 = {fmt(lam1)} "
+                   f"({status}); never above (cyclic slip from every initial state: no safe "
+                   "state exists, proved): the initial state never decides.")
+    elif (not proved and np.isfinite(lam_adj) and lam_adj < lam1
+          and not _same(lam_adj, lam1)):
         node = int(b.adjacency_node) + 1
-        first = (f"Shakes down from every initial state for lam < lam_adj = {fmt(lam_adj)}; "
-                 if lam_adj > 0 else "")
+        first = (f"Shakes down from every initial state for lam < lam_adj = {fmt(lam_adj)} in "
+                 "every run so far (numerical evidence, not a proof); " if lam_adj > 0 else "")
         span = "between lam_adj and" if lam_adj > 0 else "For lam <"
         out.append(
             f"{first}{span} lam1 = {fmt(lam1)} every extreme constraint is still "
@@ -123,13 +130,13 @@ def bounds_verdict(b, adjacency: bool = False) -> str:
             f"{fmt(lam1)} < lam < lam2 = {fmt(lam2)}; never above lam2 (cyclic slip from every "
             "initial state).")
     else:
-        first = (f"Shakes down from every initial state for lam < lam1 = {fmt(lam1)}; "
-                 if lam1 > 0 else "")
+        first = (f"Shakes down from every initial state for lam < lam1 = {fmt(lam1)} "
+                 f"({status}); " if lam1 > 0 else "")
         out.append(
             f"{first}from some initial states only for {fmt(lam1)} < lam < lam2 = {fmt(lam2)} "
             "(there the initial state decides); never above lam2 (cyclic slip from every "
             "initial state).")
-        if np.isnan(lam_adj) and n >= 3 and lam1 > 0:
+        if np.isnan(lam_adj) and not proved and lam1 > 0:
             out.append(
                 "lam_adj was not computed (shakedown_bounds(..., adjacency=True)): in coupled "
                 "systems with three or more nodes some initial states were seen to slip "

@@ -13,6 +13,7 @@ from functools import cached_property
 import numpy as np
 
 from ..model.loading import LoadCycle
+from ..model.results import short_repr
 from .step_types import SEPARATED, STATE_NAMES
 
 #: A node *slips* in the steady orbit when its total slip while in contact exceeds
@@ -138,6 +139,10 @@ class CycleRun:
     within_sampling_error : bool
         The run shook down, but the exact load breaks a stick constraint at its final state:
         the verdict lies within the sampling error (the message says where).
+    sampling_note : str
+        What the check against the exact load found ('' when nothing was needed): the flag
+        with its advice, or how far the slips at the exact load's extreme times moved the
+        final state when they settled the verdict.
     """
 
     dissipation: np.ndarray
@@ -169,6 +174,7 @@ class CycleRun:
     history: object = field(default=None, repr=False)
     sampling_error: float = 0.0
     within_sampling_error: bool = False
+    sampling_note: str = ""
 
     @cached_property
     def steady_table(self):
@@ -180,6 +186,21 @@ class CycleRun:
     def success(self) -> bool:
         """A steady orbit was reached."""
         return self.status == "periodic"
+
+    def __repr__(self) -> str:
+        return short_repr(self, ("lam", "method", "steps_per_cycle", "status", "period",
+                                 "shook_down", "steady_dissipation", "n_cycles",
+                                 "cycles_to_steady", "within_sampling_error"),
+                          {"n_nodes": int(np.size(self.final_slip)),
+                           "n_stuck": int(np.size(self.stuck_nodes))})
+
+    def verdict(self, energy: str = "[force x length]", study=None, bounds=None) -> str:
+        """The answer in plain sentences (:func:`shakedown.evolution.verdicts.cycles_verdict`):
+        shook down / cyclic slip with ``W`` in ``energy`` units / no steady state, and what the
+        check against the exact load found."""
+        from .verdicts import cycles_verdict
+
+        return cycles_verdict(self, self.lam, energy, study, bounds)
 
 
 def orbit_arrays(records):

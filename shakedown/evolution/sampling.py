@@ -27,10 +27,13 @@ class SamplingCheck:
         welded reactions miss the exact ones (0 when the run saw the load exactly).
     within : bool
         ``True`` when the run shook down but the exact load breaks a stick constraint at the
-        final state (or, if nodes separate, the smallest stick margin is below the error):
-        the verdict is not decided by this run.
+        final state even after the slips at its extreme times (every node in contact), or, if
+        nodes separate, the smallest stick margin is below the error: the verdict is not
+        decided by this run.
     message : str
-        The flag in words ('' when ``within`` is False).
+        The flag in words, with the advice that decides it; or, when the slips at the exact
+        extreme times settled it, how far they moved the final state ('' when nothing was
+        needed).
     """
 
     error: float
@@ -39,7 +42,7 @@ class SamplingCheck:
 
 
 def check_sampling(system, exact_load, lam, n_samples, v, w, shook_down, orbit, force_scale,
-                   tol_force) -> SamplingCheck:
+                   tol_force, solver=None) -> SamplingCheck:
     """Sampling error of ``exact_load`` at ``n_samples`` and the flag of a shakedown verdict.
 
     Parameters
@@ -61,44 +64,115 @@ def check_sampling(system, exact_load, lam, n_samples, v, w, shook_down, orbit, 
         ``F`` of the run [force].
     tol_force : float
         Feasibility tolerance of the steps [force]; violations below it are round-off.
+    solver : StepSolver, optional
+        Solver of the extra steps at the exact load's extreme times (built if omitted).
     """
     err_q, err_p = exact_load.sampling_error(n_samples)
     error = float(lam * max(err_q.max(initial=0.0), err_p.max(initial=0.0)))
     if not shook_down or error <= tol_force or not orbit:
         return SamplingCheck(error, False, "")
+    if solver is None:
+        from .complementarity import StepSolver
+
+        solver = StepSolver(system)
     f = system.friction
     gaps = np.concatenate([r.w for r in orbit])
     if np.all(gaps == 0):
-        # exact: the state is fixed, so each stick margin is an offset plus lam * a closed-form
-        # minimum of the exact periodic part (MODEL.md s.2-3)
-        q = exact_load.q0 + system.A @ v + system.B @ w
-        p = exact_load.p0 + system.B.T @ v + system.C @ w
-        m_back = f * p - q + lam * exact_load.periodic_min(-1.0, f)[0]   # I_j: f p - q >= 0
-        m_fwd = f * p + q + lam * exact_load.periodic_min(1.0, f)[0]     # II_j: f p + q >= 0
-        margins = np.minimum(m_back, m_fwd)
-        worst = int(np.argmin(margins))
-        if margins[worst] >= -tol_force:
-            return SamplingCheck(error, False, "")
-        which = "I" if m_back[worst] <= m_fwd[worst] else "II"
-        detail = (f"the final state breaks constraint {which}_{worst + 1} of the exact load by "
-                  f"{-margins[worst]:.3g} ({-margins[worst] / force_scale:.2g} of the force "
-                  "scale)")
+        return _settle_at_extremes(system, exact_load, lam, n_samples, v, error, force_scale,
+                                   tol_force, solver)
+    contact = gaps == 0
+    P = np.concatenate([r.p for r in orbit])
+    Q = np.concatenate([r.q for r in orbit])
+    margin = np.where(contact, f * P - np.abs(Q), np.inf).min(axis=0)
+    budget = lam * ((1.0 + f) * np.maximum(err_q, err_p))
+    short = np.flatnonzero(margin < budget)
+    if short.size == 0:
+        return SamplingCheck(error, False, "")
+    worst = int(short[np.argmin(margin[short] - budget[short])])
+    detail = (f"node {worst + 1} keeps a stick margin of only {margin[worst]:.3g}, below "
+              f"what the sampling can hide ({budget[worst]:.3g})")
+    if margin[worst] > tol_force:
+        # the budget falls like 1 - cos(pi k / S); the first S' whose budget is below the margin
+        S2 = n_samples
+        while S2 < 2 ** 24 and budget[worst] * _loss(exact_load, S2) / _loss(exact_load,
+                                                                             n_samples) >= margin[worst]:
+            S2 *= 2
+        advice = (f"a run with steps_per_cycle >= {S2} decides it if it ends in this state "
+                  "(the error falls like 1 / steps_per_cycle^2)")
     else:
-        contact = np.concatenate([r.w for r in orbit]) == 0
-        P = np.concatenate([r.p for r in orbit])
-        Q = np.concatenate([r.q for r in orbit])
-        margin = np.where(contact, f * P - np.abs(Q), np.inf).min(axis=0)
-        budget = lam * ((1.0 + f) * np.maximum(err_q, err_p))
-        short = np.flatnonzero(margin < budget)
-        if short.size == 0:
-            return SamplingCheck(error, False, "")
-        worst = int(short[np.argmin(margin[short] - budget[short])])
-        detail = (f"node {worst + 1} keeps a stick margin of only {margin[worst]:.3g}, below "
-                  f"what the sampling can hide ({budget[worst]:.3g})")
+        advice = ("the node sits at its friction limit, so no number of steps decides it (the "
+                  "margin stays ~0 while the error shrinks); the shakedown holds for the load "
+                  f"sampled at {n_samples} points, and for the exact load only if lam < lam1 "
+                  "(shakedown bounds)")
     return SamplingCheck(error, True, (
         f"shook down on the load sampled at {n_samples} points per period, but {detail}: the "
-        f"verdict lies within the load's sampling error ({error:.3g}); rerun with more "
-        "steps_per_cycle"))
+        f"verdict lies within the load's sampling error ({error:.3g}); {advice}"))
+
+
+def _loss(load, S):
+    """Sampling loss ``1 - cos(pi / S)`` of the first harmonic (1 for sampled loads)."""
+    return 1.0 - np.cos(np.pi / S) if load.kind == "harmonic" else 1.0
+
+
+def _exact_margins(system, load, lam, v):
+    """Smallest stick margins over the period of the exact load at the fixed state ``(v, 0)``:
+    ``(margin_I, t_I, margin_II, t_II)``, each shape (N,) (closed form, MODEL.md s.2-3)."""
+    f = system.friction
+    q = load.q0 + system.A @ v
+    p = load.p0 + system.B.T @ v
+    mI, tI = load.periodic_min(-1.0, f)    # I_j: f p - q >= 0
+    mII, tII = load.periodic_min(1.0, f)   # II_j: f p + q >= 0
+    return f * p - q + lam * mI, tI, f * p + q + lam * mII, tII
+
+
+def _settle_at_extremes(system, load, lam, n_samples, v, error, force_scale, tol_force, solver,
+                        max_rounds=None):
+    """Decide a shakedown found on sampled loads for the exact load.
+
+    With every node in contact, a stuck state's stick margins are an offset plus ``lam`` times
+    the exact minimum of the load's periodic part, and that minimum is reached at a known time
+    ``t*`` (:meth:`~shakedown.LoadCycle.periodic_min`).  If the final state breaks a constraint
+    of the exact load, the exact evolution slips there up to ``t*``: one step from the state to
+    the exact load at ``t*``.  Repeating this for the worst constraint until every exact margin
+    holds gives a state that provably stays stuck under the exact load at all times; what the
+    sampling error affected is then only the final state (by the slips of these steps), not the
+    verdict.  If a step opens a gap, fails, or the rounds run out (``4 N + 4``), the verdict is
+    not decided (``within = True``).
+    """
+    n = system.n_nodes
+    rounds = 4 * n + 4 if max_rounds is None else max_rounds
+    v0 = np.asarray(v, float)
+    cur = v0.copy()
+    for k in range(rounds + 1):
+        mI, tI, mII, tII = _exact_margins(system, load, lam, cur)
+        margins = np.minimum(mI, mII)
+        worst = int(np.argmin(margins))
+        if margins[worst] >= -tol_force:
+            if k == 0:
+                return SamplingCheck(error, False, "")
+            shift = np.abs(cur - v0) * system.diagonal()[:n] / force_scale
+            j = int(np.argmax(shift))
+            return SamplingCheck(error, False, (
+                f"the exact load (its extremes in closed form, not the {n_samples} samples) "
+                f"stays stuck after {k} further slip step(s) at its extreme times, of at most "
+                f"{abs(cur[j] - v0[j]):.3g} at node {j + 1}: the shakedown holds for the exact "
+                "load; the sampling affects only the final slips, by that much"))
+        if k == rounds:
+            break
+        t_star = float(tI[worst] if mI[worst] <= mII[worst] else tII[worst])
+        q_w, p_w = load.evaluate(t_star, lam)
+        r = solver.solve(cur, q_w, p_w, None)
+        if not r.success or np.any(r.gap != 0):
+            break
+        cur = np.asarray(r.slip, float)
+    which = "I" if mI[worst] <= mII[worst] else "II"
+    return SamplingCheck(error, True, (
+        f"shook down on the load sampled at {n_samples} points per period, but the exact load "
+        f"breaks constraint {which}_{worst + 1} by {-margins[worst]:.3g} "
+        f"({-margins[worst] / force_scale:.2g} of the force scale) even after slipping at its "
+        f"extreme times ({rounds} rounds): the verdict lies within the load's sampling error "
+        f"({error:.3g}) and this run cannot decide it. The bounds can: above lam2 of the exact "
+        "load no state stays stuck (cyclic slip from every initial state)"))
 
 
 def non_finite_message(force_scale: float, system) -> str:
@@ -126,6 +200,7 @@ def trust(run, system, exact_load, orbit, solver):
         return run  # the exact path of the given samples: nothing was sampled
     chk = check_sampling(system, exact_load, run.lam, run.steps_per_cycle, run.final_slip,
                          run.final_gap, run.shook_down, orbit, run.force_scale,
-                         solver.feas_tol * run.force_scale)
-    msg = run.message + ("; " + chk.message if chk.within else "")
-    return replace(run, sampling_error=chk.error, within_sampling_error=chk.within, message=msg)
+                         solver.feas_tol * run.force_scale, solver)
+    msg = run.message + ("; " + chk.message if chk.message else "")
+    return replace(run, sampling_error=chk.error, within_sampling_error=chk.within, message=msg,
+                   sampling_note=chk.message)

@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..model.errors import InputError
+from ..model.results import short_repr
 from ..model.validation import check_count
 from .steady_maps import (
     FD_STEP,
@@ -106,6 +107,18 @@ class SteadyCycle:
     residual_history: np.ndarray = field(repr=False)
     spectral_radius: float = float("nan")
     run: object = field(repr=False, default=None)
+
+    def __repr__(self) -> str:
+        return short_repr(self, ("status", "method", "period", "shook_down",
+                                 "steady_dissipation", "n_evaluations", "n_iterations",
+                                 "residual", "spectral_radius"),
+                          {"n_nodes": int(np.size(self.slip))})
+
+    def verdict(self, energy: str = "[force x length]") -> str:
+        """The answer in plain sentences (:func:`shakedown.evolution.verdicts.steady_verdict`)."""
+        from .verdicts import steady_verdict
+
+        return steady_verdict(self, energy)
 
     @property
     def steady_table(self):

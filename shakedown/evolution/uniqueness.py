@@ -17,6 +17,7 @@ import pandas as pd
 
 from ..model import citations
 from ..model.errors import InputError, ShapeError
+from ..model.results import short_repr
 from .steady import _check_common, natural_slip_scale, sample_initial_slips, steady_cycle
 from .steady_maps import tangential_stiffness
 
@@ -78,6 +79,16 @@ class UniquenessStudy:
     fraction_shook_down: float
     fraction_steady: float
     n_states: int
+
+    def __repr__(self) -> str:
+        return short_repr(self, ("lam", "n_states", "unique_dissipation", "dissipation_spread",
+                                 "w_tol", "fraction_shook_down", "fraction_steady"))
+
+    def verdict(self, energy: str = "[force x length]") -> str:
+        """Whether the steady dissipation depends on the initial state, in one sentence."""
+        from .verdicts import uniqueness_verdict
+
+        return uniqueness_verdict(self, energy)
 
     def summary(self) -> str:
         """A few lines: the verdict and the range of outcomes."""

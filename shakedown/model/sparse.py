@@ -16,6 +16,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .errors import InputError, NotPositiveDefiniteError, NotSymmetricError, ShapeError
+from .numbers import position
 
 #: Lanczos basis size: contact stiffnesses have clustered extreme eigenvalues (a long interface's
 #: high-frequency modes differ by ~1e-5 relative), where ARPACK's default 20 vectors restart
@@ -65,8 +66,8 @@ def sparse_matrix(name: str, value, n: int | None = None,
     if not np.all(np.isfinite(M.data)):
         coo = M.tocoo()
         k = int(np.flatnonzero(~np.isfinite(coo.data))[0])
-        raise InputError(f"{name} must be finite; entry ({int(coo.row[k])}, {int(coo.col[k])}) "
-                         f"is {coo.data[k]}")
+        raise InputError(f"{name} must be finite; {name} "
+                         f"{position((coo.row[k], coo.col[k]))} is {coo.data[k]}")
     M.eliminate_zeros()
     M.sort_indices()
     return M
@@ -89,8 +90,9 @@ def check_symmetric(name: str, M: sp.csr_matrix, rtol: float, scale: float) -> N
     if asym > rtol * scale:
         i, j = int(D.row[k]), int(D.col[k])
         raise NotSymmetricError(
-            f"K must be symmetric: {name}[{i},{j}] = {M[i, j]:.6g} but {name}[{j},{i}] = "
-            f"{M[j, i]:.6g} (max asymmetry {asym:.3g} > {rtol:g} * max|K| = {rtol * scale:.3g}); "
+            f"K must be symmetric: {name} {position((i, j))} is {M[i, j]:.6g} but {name} "
+            f"{position((j, i))} is {M[j, i]:.6g} (max asymmetry {asym:.3g} > {rtol:g} * max|K| = "
+            f"{rtol * scale:.3g}); "
             "symmetrise it, e.g. (M + M.T) / 2, or pass a larger symmetry_rtol")
 
 

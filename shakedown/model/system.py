@@ -19,6 +19,7 @@ from . import sparse as _sparse
 from .critical import CriticalFriction as CriticalFriction
 from .critical import critical_friction_2d
 from .errors import InputError, NotSymmetricError, ShapeError
+from .numbers import position
 from .validation import MAX_CONDITION, check_conditioning, real_array
 
 #: Relative tolerance of the symmetry check ``max|K - K^T| <= SYMMETRY_RTOL * max|K|``.
@@ -58,7 +59,7 @@ def _as_matrix(name: str, value, n: int | None = None, shape: tuple | None = Non
     if not np.all(np.isfinite(arr)):
         bad = np.argwhere(~np.isfinite(arr))[0]
         raise InputError(
-            f"{name} must be finite; entry {tuple(int(i) for i in bad)} is {arr[tuple(bad)]}"
+            f"{name} must be finite; {name} {position(tuple(bad))} is {arr[tuple(bad)]}"
         )
     return arr
 
@@ -84,7 +85,7 @@ def _as_friction(value, n: int, dim: int = 2) -> np.ndarray:
         raise InputError(f"friction must be finite; got {f[~np.isfinite(f)][0]}")
     if np.any(f < 0):
         j = int(np.argmax(np.any(f < 0, axis=-1) if aniso else f < 0))
-        raise InputError(f"friction must be >= 0; node {j} has friction {f[j]}")
+        raise InputError(f"friction must be >= 0; node {j + 1} has friction {f[j]}")
     if aniso and np.array_equal(f[:, 0], f[:, 1]):
         f = np.ascontiguousarray(f[:, 0])  # isotropic after all: one coefficient per node
     f.setflags(write=False)
@@ -175,8 +176,8 @@ class DiscreteSystem:
             if asym > self.symmetry_rtol * scale:
                 i, j = np.unravel_index(np.argmax(np.abs(M - M.T)), M.shape)
                 raise NotSymmetricError(
-                    f"K must be symmetric: {name}[{i},{j}] = {M[i, j]:.6g} but "
-                    f"{name}[{j},{i}] = {M[j, i]:.6g} (max asymmetry {asym:.3g} > "
+                    f"K must be symmetric: {name} {position((i, j))} is {M[i, j]:.6g} but "
+                    f"{name} {position((j, i))} is {M[j, i]:.6g} (max asymmetry {asym:.3g} > "
                     f"{self.symmetry_rtol:g} * max|K| = {self.symmetry_rtol * scale:.3g}); "
                     "symmetrise it, e.g. (M + M.T) / 2, or pass a larger symmetry_rtol"
                 )

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import InputError, ShapeError
+from .numbers import position
 
 
 def check_same_nodes(system, load) -> None:
@@ -105,7 +106,7 @@ def check_node_vector(name: str, value, n: int, *, nonneg: bool = False,
         raise InputError(f"{name} must be finite; got {x[~np.isfinite(x)][0]}")
     if nonneg and np.any(x < 0):
         j = int(np.argmax(x < 0))
-        raise InputError(f"{name} must be >= 0 (nodes cannot penetrate); node {j} has {x[j]}")
+        raise InputError(f"{name} must be >= 0 (nodes cannot penetrate); node {j + 1} has {x[j]}")
     return x
 
 
@@ -171,14 +172,15 @@ def check_stiffness(name: str, K, *, symmetry_rtol: float = 1e-8,
         raise ShapeError(f"{name} must be a non-empty square matrix; got shape {K.shape}")
     if not np.all(np.isfinite(K)):
         bad = tuple(int(i) for i in np.argwhere(~np.isfinite(K))[0])
-        raise InputError(f"{name} must be finite; entry {bad} is {K[bad]}")
+        raise InputError(f"{name} must be finite; {name} {position(bad)} is {K[bad]}")
     scale = float(np.abs(K).max())
     asym = float(np.abs(K - K.T).max())
     if asym > symmetry_rtol * scale:
         i, j = np.unravel_index(np.argmax(np.abs(K - K.T)), K.shape)
         raise NotSymmetricError(
-            f"{name} must be symmetric: {name}[{i},{j}] = {K[i, j]:.6g} but {name}[{j},{i}] = "
-            f"{K[j, i]:.6g} (max asymmetry {asym:.3g} > {symmetry_rtol:g} * max|{name}|); "
+            f"{name} must be symmetric: {name} {position((i, j))} is {K[i, j]:.6g} but {name} "
+            f"{position((j, i))} is {K[j, i]:.6g} (max asymmetry {asym:.3g} > {symmetry_rtol:g} * "
+            f"max|{name}|); "
             "symmetrise it, e.g. (K + K.T) / 2"
         )
     K = 0.5 * (K + K.T)

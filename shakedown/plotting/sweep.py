@@ -68,7 +68,12 @@ def _mark_bounds(ax, result, axis):
     xu, vu = where_and_value("lam_u")
     if np.isfinite(xu):
         ax.axvline(xu, color="tab:brown", ls=(0, (5, 2, 1, 2, 1, 2)), lw=1.2,
-                   label=rf"$\lambda_u$ = {vu:.4g}{mean}{at(xu)}: every crack slips")
+                   label=rf"$\lambda_u$ = {vu:.4g}{mean}{at(xu)}: every {_word(result)} slips")
+
+
+def _word(result) -> str:
+    """"crack" for the crack study, "node" for a given system (``spec.node_word``)."""
+    return getattr(getattr(result, "spec", None), "node_word", "crack")
 
 
 def _zoom_range(result, col):
@@ -158,10 +163,15 @@ def plot_sweep(result, ax=None, *, axis: str = "lam", bands: bool = True,
                                 lw=0, label=f"{level:.0%} confidence of the mean ({name})")
     _mark_bounds(ax, result, col)
     ax.set_xlabel(_XLABEL[col])
-    ax.set_ylabel(r"$W^* = W\mu / (4(1-\nu)p_0^2\bar a^2)$ per cycle [-]")
-    ax.set_ylim(bottom=min(0.0, ax.get_ylim()[0]))
     spec = getattr(result, "spec", None)
-    if spec is not None:
+    source = getattr(spec, "source", None)  # a given system (any model): W, not W*
+    ax.set_ylabel(f"$W$ per cycle {source.energy_unit}" if source is not None
+                  else r"$W^* = W\mu / (4(1-\nu)p_0^2\bar a^2)$ per cycle [-]")
+    ax.set_ylim(bottom=min(0.0, ax.get_ylim()[0]))
+    if source is not None:
+        ax.set_title(f"Steady dissipation: {spec.describe()}, {spec.n_states} initial states",
+                     fontsize=9)
+    elif spec is not None:
         reals = (f"{spec.n_realisations} realisations x " if spec.n_realisations != 1 else "")
         ax.set_title(f"Steady dissipation: {spec.n_cracks} cracks, density {spec.density}, "
                      f"f = {spec.friction}, {reals}{spec.n_states} initial states", fontsize=9)
@@ -197,9 +207,9 @@ def plot_fractions(result, ax=None, *, axis: str = "lam"):
                         if k == 0 else None)
     _mark_bounds(ax, result, col)
     ax.set_xlabel(_XLABEL[col])
-    ax.set_ylabel("fraction of cracks (steady cycle) [-]")
+    ax.set_ylabel(f"fraction of {_word(result)}s (steady cycle) [-]")
     ax.set_ylim(-0.02, 1.02)
-    ax.set_title("Cracks that slip / open in the steady cycle"
+    ax.set_title(f"{_word(result).capitalize()}s that slip / open in the steady cycle"
                  + (f" ({n_real} realisations)" if n_real > 1 else ""), fontsize=9)
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0)
     return ax

@@ -71,7 +71,7 @@ class NodePartition:
         slip = states == SLIP
         if np.any(np.abs(chi[slip]) != 1.0):
             j = int(np.flatnonzero(slip & (np.abs(chi) != 1.0))[0])
-            raise InputError(f"chi must be +1 or -1 at slip nodes; node {j} has chi = {chi[j]}")
+            raise InputError(f"chi must be +1 or -1 at slip nodes; node {j + 1} has chi = {chi[j]}")
         chi = np.where(slip, chi, 0.0)
         margin = real_array("margin", self.margin)
         if margin.shape not in ((), states.shape):
@@ -247,7 +247,7 @@ def classify_nodes(
         elif cone <= ftol:
             if p[j] <= ftol:
                 raise InputError(
-                    f"node {j} is closed with p = {p[j]:.6g} <= 0 and q = {q[j]:.6g}: not an "
+                    f"node {j + 1} is closed with p = {p[j]:.6g} <= 0 and q = {q[j]:.6g}: not an "
                     "admissible contact state; pass reactions with compression positive"
                 )
             states[j] = SLIP

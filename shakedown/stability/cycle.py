@@ -17,6 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model.errors import InputError
+from ..model.numbers import sig
+from ..model.results import short_repr
 from ..model.validation import real_array
 from .classify import CLASSIFY_RTOL, SLIP, classify_nodes
 from .mceip import mceip_mu
@@ -58,6 +60,24 @@ class CycleStability:
     @property
     def ever_unstable(self) -> bool:
         return bool(self.min_margin <= 0)
+
+    def __repr__(self) -> str:
+        return short_repr(self, ("min_margin", "ever_unstable"),
+                          {"n_snapshots": int(len(self.table))})
+
+    def verdict(self) -> str:
+        """Stable along the cycle or not, with the smallest margin ``alpha* - 1``."""
+        n = int(len(self.table))
+        if not np.isfinite(self.min_margin):
+            return (f"Stable at all {n} snapshots of the cycle: no node was in impending slip "
+                    "with a divergence mode (alpha* = inf).")
+        if self.ever_unstable:
+            t = self.table
+            first = float(t.loc[t["unstable"].astype(bool), "t"].min())
+            return (f"Unstable during the cycle: the smallest margin alpha* - 1 = "
+                    f"{sig(self.min_margin)} <= 0, first at t = {sig(first)} (of {n} snapshots).")
+        return (f"Stable at all {n} snapshots of the cycle: the smallest margin alpha* - 1 = "
+                f"{sig(self.min_margin)} > 0.")
 
 
 def stability_along_cycle(

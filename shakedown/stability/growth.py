@@ -19,6 +19,8 @@ import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
 from ..model.errors import InputError
+from ..model.numbers import sig
+from ..model.results import short_repr
 from .classify import NodePartition
 from .enumerate import MAX_ENUMERATION_NODES
 from .linear import restricted_eigenpairs
@@ -118,6 +120,19 @@ class GrowthRates:
     @property
     def max_rate(self) -> float:
         return float(self.lam.max()) if self.lam.size else 0.0
+
+    def __repr__(self) -> str:
+        return short_repr(self, ("mu", "status"), {"n_rates": int(self.lam.size),
+                                                   "max_rate": self.max_rate})
+
+    def verdict(self) -> str:
+        """The growth rates at friction ``mu`` in one sentence (``s`` [1/time])."""
+        if self.lam.size:
+            return (f"At friction {sig(self.mu)} the largest growth rate is s = "
+                    f"{sig(self.max_rate)} [1/time] ({self.lam.size} rate"
+                    f"{'s' * (self.lam.size != 1)} in all; status {self.status}).")
+        return (f"At friction {sig(self.mu)} no growth rate was found in the scanned range "
+                f"(status {self.status}): no divergence there.")
 
 
 def _support_key(r: MCEIPResult) -> tuple:

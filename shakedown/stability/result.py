@@ -6,6 +6,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..model.numbers import sig
+from ..model.results import short_repr
 from .pencil import SlipPencil
 
 #: Default tolerance of the verification (relative residuals, see :func:`verify_eigenpair`).
@@ -77,6 +79,31 @@ class MCEIPResult:
     method: str
     iterations: int = 0
     history: tuple = field(default=(), repr=False)
+
+    def __repr__(self) -> str:
+        return short_repr(self, ("status", "mu", "lam", "method", "verified", "minimal",
+                                 "residual"),
+                          {"n_slip_nodes": int(np.size(self.nodes)),
+                           "n_slipping_in_mode": int(np.size(self.support))})
+
+    def verdict(self, friction: float | None = None) -> str:
+        """The answer in plain sentences: the critical friction ``mu*`` (computed; certified
+        the smallest when ``minimal``), and, given the system's ``friction``, stable or not."""
+        n = int(np.size(self.nodes))
+        who = f"{n} slipping node{'s' * (n != 1)}"
+        if self.status != "found" or not np.isfinite(self.mu):
+            text = (f"No critical friction found for this partition ({who}; status "
+                    f"{self.status}): {self.message}")
+            return text if friction is None else f"Stable at friction {sig(friction)}: {text}"
+        how = ("certified the smallest by enumeration" if self.minimal
+               else f"found by the {self.method} method, not certified the smallest")
+        text = (f"Critical friction mu* = {sig(self.mu)} ({who}, {how}; "
+                f"{int(np.size(self.support))} of them slip in the divergence mode).")
+        if friction is None:
+            return text
+        word = ("Stable: friction {f} is below" if friction < self.mu
+                else "Unstable: friction {f} is at or above")
+        return word.format(f=sig(friction)) + " the critical friction. " + text
 
     @property
     def found(self) -> bool:

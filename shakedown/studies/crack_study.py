@@ -36,6 +36,7 @@ import numpy as np
 import pandas as pd
 
 from ..model.errors import InputError
+from ..model.results import VerdictText, short_repr
 from . import summary as _summary
 from .design import initial_states, lam_points, refine_points, state_kind
 from .engine import Task, run_tasks
@@ -53,8 +54,12 @@ def realisation_model(spec: SweepSpec, r: int):
     """``(cracks, model, load)`` of realisation ``r`` of a study (cached per process).
 
     The cracks are drawn with ``numpy.random.SeedSequence(spec.seed, spawn_key=(r, 0))``;
-    ``model`` is ``crack_networks.kachanov_model(...)``, ``load`` its ``load_cycle``.
+    ``model`` is ``crack_networks.kachanov_model(...)``, ``load`` its ``load_cycle``.  A spec
+    with a ``source`` (a given system) returns ``(None, source, source.load)``: the source has
+    the model's ``system`` and ``normalised_dissipation``.
     """
+    if spec.source is not None:
+        return None, spec.source, spec.source.load
     import crack_networks as cn
 
     ss = np.random.SeedSequence(spec.seed, spawn_key=(r, 0))
@@ -76,9 +81,13 @@ def _realisation_task(spec: SweepSpec, r: int) -> dict:
     cracks, model, load = realisation_model(spec, r)
     t1 = time.perf_counter()
     b = shakedown_bounds(model.system, load, separation=False, adjacency=True)  # lam_adj: opt-in
-    a = np.asarray(cracks.half_lengths, float)
+    if cracks is None:  # a given system: no crack sizes
+        size = dict(n_nodes=int(model.system.n_nodes), abar=float("nan"))
+    else:
+        a = np.asarray(cracks.half_lengths, float)
+        size = dict(n_cracks=int(a.size), abar=float(a.mean()))
     safe = np.asarray(b.state_at_lam2, float)
-    return dict(realisation=r, n_cracks=int(a.size), abar=float(a.mean()),
+    return dict(realisation=r, **size,
                 lam1=float(b.lam1), lam2=float(b.lam2), lam_adj=float(b.lam_adj),
                 bounds_status=str(b.status),
                 safe_state=json.dumps([float(x) for x in safe]) if safe.size else "",
@@ -178,6 +187,8 @@ class SweepResult:
     bands : pandas.DataFrame
         Per point over realisations: mean, std and Student-t ``confidence`` interval.
     verdict : str
+        The study's answer (:func:`.summary.verdict`); also callable, ``res.verdict()``, like
+        the ``verdict()`` of every other result.
     lams : ndarray
         Every load factor of the study (all realisations), sorted.
     store : pathlib.Path
@@ -202,6 +213,15 @@ class SweepResult:
     wall_seconds: float
     task_seconds: pd.Series
     confidence: float = 0.95
+
+    def __post_init__(self):
+        object.__setattr__(self, "verdict", VerdictText(self.verdict))  # res.verdict() too
+
+    def __repr__(self) -> str:
+        return short_repr(self, ("n_run", "n_resumed", "wall_seconds"),
+                          {"model": self.spec.describe(), "n_runs": int(len(self.runs)),
+                           "n_load_factors": int(np.size(self.lams)),
+                           "n_states": self.spec.n_states})
 
     def plot(self, ax=None, **kwargs):
         """``W*`` against ``lam`` (or ``lam / lam2``): see :func:`shakedown.plotting.sweep`."""

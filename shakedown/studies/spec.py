@@ -2,18 +2,83 @@
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, fields
+from dataclasses import dataclass, fields
 
 import numpy as np
 
 from ..model.errors import InputError
 
-__all__ = ["SweepSpec"]
+__all__ = ["SweepSpec", "SystemSource"]
 
 _SOLVER_FIELDS = ("method", "steps_per_cycle", "max_cycles", "tol")
 _SAMPLER_FIELDS = ("density", "half_length", "orientation", "min_spacing")
 _MODEL_FIELDS = ("n_cracks", *_SAMPLER_FIELDS, "seed", "shear_modulus", "poisson_ratio",
                  "friction", "interaction_radius")
+
+
+@dataclass(frozen=True, eq=False)
+class SystemSource:
+    """One given system and load to sweep (any model: matrices, files, FE, half-plane, a crack
+    set read from a file, 3-D kinds): the study's single realisation.
+
+    Equal (and hashed) by ``name`` and a SHA-256 ``digest`` of every number of the system and
+    the load, so that a store made with another model is refused on resume and the per-process
+    caches key on the content.  ``W*`` is ``W`` itself for these models (no normalisation):
+    ``[force x length]`` per cycle (``energy_unit``).
+
+    Build with :meth:`of`.
+    """
+
+    name: str
+    system: object
+    load: object
+    digest: str
+    energy_unit: str = "[force x length]"
+
+    @classmethod
+    def of(cls, system, load, name: str = "model", energy_unit: str = "[force x length]"):
+        """The source of ``system`` (a :class:`~shakedown.DiscreteSystem`) and ``load`` (a
+        :class:`~shakedown.LoadCycle` with the same number of nodes)."""
+        import hashlib
+
+        import scipy.sparse as sp
+
+        from ..model.loading import LoadCycle
+        from ..model.system import DiscreteSystem
+
+        if not isinstance(system, DiscreteSystem):
+            raise InputError(f"system must be a DiscreteSystem; got {type(system).__name__}")
+        if not isinstance(load, LoadCycle) or load.n_nodes != system.n_nodes:
+            raise InputError(f"load must be a LoadCycle of {system.n_nodes} nodes; got {load!r}")
+        h = hashlib.sha256()
+        K = system.K
+        for a in ((K.data, K.indices, K.indptr) if sp.issparse(K) else (K,)):
+            h.update(np.ascontiguousarray(a).tobytes())
+        h.update(np.ascontiguousarray(system.friction, float).tobytes())
+        h.update(load.kind.encode())
+        for key in ("q0", "p0", "q_cos", "q_sin", "p_cos", "p_sin", "q1", "p1"):
+            a = getattr(load, key)
+            if a is not None:
+                h.update(key.encode() + np.ascontiguousarray(a, float).tobytes())
+        return cls(str(name), system, load, h.hexdigest(), str(energy_unit))
+
+    @property
+    def n_nodes(self) -> int:
+        return int(self.system.n_nodes)
+
+    def normalised_dissipation(self, W, p0=None):
+        """``W`` itself (these models have no crack-size normalisation)."""
+        return W
+
+    def __eq__(self, other):
+        return (isinstance(other, SystemSource) and (self.name, self.digest)
+                == (other.name, other.digest))
+
+    def __hash__(self):
+        return hash((self.name, self.digest))
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "digest": self.digest, "n_nodes": self.n_nodes}
 
 
 @dataclass(frozen=True)
@@ -62,6 +127,10 @@ class SweepSpec:
     stress_scale : float, optional
         ``p0`` of the normalisation of ``W*``; default ``max|static|`` (or ``max|cyclic|`` when
         the static stress is zero).
+    source : SystemSource, optional
+        Sweep this given system and load instead of drawing crack sets: one realisation, the
+        crack-set and far-field fields unused, ``W* = W`` [force x length].  Load factors and
+        initial states as above.
     """
 
     n_cracks: int = 100
@@ -90,10 +159,20 @@ class SweepSpec:
     max_cycles: int = 200
     tol: float = 1e-10
     stress_scale: float | None = None
+    source: SystemSource | None = None
 
     def __post_init__(self):
         def setv(name, value):
             object.__setattr__(self, name, value)
+
+        if self.source is not None:
+            if not isinstance(self.source, SystemSource):
+                raise InputError(f"source must be a SystemSource (SystemSource.of(system, "
+                                 f"load)); got {type(self.source).__name__}")
+            if self.n_realisations != 1:
+                raise InputError(f"n_realisations = {self.n_realisations}: a given system has "
+                                 "one realisation; set n_realisations = 1 (only random crack "
+                                 "networks draw several)")
 
         for name in ("static", "cyclic"):
             v = tuple(float(x) for x in np.ravel(getattr(self, name)))
@@ -101,7 +180,11 @@ class SweepSpec:
                 raise InputError(f"{name} must be 3 finite stresses (sxx, sxy, syy); got {v}")
             setv(name, v)
         if not isinstance(self.lams, str):
-            lams = tuple(float(x) for x in np.ravel(self.lams))
+            try:
+                lams = tuple(float(x) for x in np.ravel(self.lams))
+            except (TypeError, ValueError):
+                raise InputError(f"lams must be 'auto' or a list of load factors >= 0; got "
+                                 f"{self.lams!r}") from None
             if not lams or not all(np.isfinite(x) and x >= 0 for x in lams):
                 raise InputError(f"lams must be 'auto' or a list of load factors >= 0; got {lams}")
             setv("lams", lams)
@@ -178,6 +261,29 @@ class SweepSpec:
     def solver_options(self) -> dict:
         return {k: getattr(self, k) for k in _SOLVER_FIELDS}
 
+    @property
+    def node_word(self) -> str:
+        """What a node is in words: "crack" for the crack study, "node" otherwise."""
+        return "node" if self.source is not None else "crack"
+
+    @property
+    def dissipation_name(self) -> str:
+        """``"W*"`` (normalised, crack study) or ``"W"`` (a given system, with its unit)."""
+        return "W" if self.source is not None else "W*"
+
+    def describe(self) -> str:
+        """The swept model in words, e.g. ``"1 realisation of 100 cracks, friction 0.6"`` or
+        ``"the model 'two_node_coupled' (2 nodes)"``."""
+        if self.source is not None:
+            n = self.source.n_nodes
+            return f"the model {self.source.name!r} ({n} node{'s' * (n != 1)})"
+        r = self.n_realisations
+        return (f"{r} realisation{'s' * (r != 1)} of {self.n_cracks} cracks, friction "
+                f"{self.friction}")
+
     def to_dict(self) -> dict:
-        d = asdict(self)
-        return {k: list(v) if isinstance(v, tuple) else v for k, v in d.items()}
+        d = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "source"}
+        d = {k: list(v) if isinstance(v, tuple) else v for k, v in d.items()}
+        if self.source is not None:  # absent for the crack study: its stores stay readable
+            d["source"] = self.source.to_dict()
+        return d

@@ -1,12 +1,15 @@
-"""Tables and verdict of the crack-network study: per (realisation, load factor), per band of
-load factors, over realisations, and the one-paragraph answer."""
+"""Tables and verdict of a sweep (the crack-network study or a given system): per
+(realisation, load factor), per band of load factors, over realisations, and the one-paragraph
+answer."""
 
 from __future__ import annotations
 
 import numpy as np
 import pandas as pd
 
-__all__ = ["summarise", "bands", "regions", "verdict", "lam_u", "SAME_RTOL"]
+from ..model.numbers import sig
+
+__all__ = ["summarise", "bands", "regions", "verdict", "lam_u", "shown_differ", "SAME_RTOL"]
 
 #: ``W*`` min and max count as "the same" when they differ by at most this fraction of max:
 #: runs that reach the same orbit agree to the steady-state tolerance (``tol = 1e-10`` relative
@@ -111,59 +114,109 @@ def bands(summary: pd.DataFrame, confidence: float = 0.95) -> pd.DataFrame:
     return pd.DataFrame(out).sort_values("x", kind="stable").reset_index(drop=True)
 
 
+def shown_differ(wmin, wmax, digits: int = 4) -> np.ndarray:
+    """Min and max differ *as the tables print them* (``digits`` significant digits, the
+    tolerance of the summary table and of the verdict that summarises it)."""
+    return np.array([sig(a, digits) != sig(b, digits) for a, b in
+                     zip(np.atleast_1d(wmin), np.atleast_1d(wmax), strict=True)], bool)
+
+
+def _plural(k: int, word: str) -> str:
+    return f"{k} {word}{'s' * (k != 1)}"
+
+
 def verdict(spec, realisations: pd.DataFrame, summary: pd.DataFrame, lamu: pd.DataFrame,
             regs: pd.DataFrame) -> str:
     """The study's answer in one paragraph: the band where the initial state matters, the load
     factor above which the dissipation is the same from every initial state, and, per band,
-    whether any initial state ended in cyclic slip."""
-    n = len(realisations)
+    whether any initial state ended in cyclic slip.
+
+    Numbers have 4 significant digits (:func:`~shakedown.model.numbers.sig`); "min and max
+    differ" uses the same digits as the summary table, "the same from every initial state" the
+    stricter :data:`SAME_RTOL`.
+    """
     l1, l2 = realisations["lam1"].to_numpy(float), realisations["lam2"].to_numpy(float)
     la = realisations["lam_adj"].to_numpy(float)
+    D = spec.dissipation_name
+    unit = f" {spec.source.energy_unit}" if spec.source is not None else ""
+    word = spec.node_word
 
     def stat(x, digits=4):
         x = x[np.isfinite(x)]
         if not x.size:
             return "nan"
         if x.size == 1:
-            return f"{x[0]:.{digits}g}"
-        return f"{x.mean():.{digits}g} (range {x.min():.{digits}g}-{x.max():.{digits}g})"
+            return sig(x[0], digits)
+        return f"{sig(x.mean(), digits)} (range {sig(x.min(), digits)}-{sig(x.max(), digits)})"
 
-    parts = [f"{n} realisation(s) of {spec.n_cracks} cracks, friction {spec.friction}, "
-             f"{int(summary['n_states'].max())} initial states per load factor."]
-    band = summary[(summary["lam"] > summary["lam1"]) & (summary["lam"] <= summary["lam2"])]
-    parts.append(f"By the bounds, the initial state decides whether the body shakes down for "
-                 f"lam1 = {stat(l1)} < lam < lam2 = {stat(l2)} "
-                 f"(lam1/lam2 = {stat(l1 / l2, 3)}): there min W* = "
-                 f"{band['W_star_min'].max() if len(band) else float('nan'):.3g} and max W* up "
-                 f"to {band['W_star_max'].max() if len(band) else float('nan'):.3g} "
-                 f"({len(band)} load factors).")
+    n_lams = int(summary["lam"].nunique()) if len(summary) else 0
+    n_states = int(summary["n_states"].max()) if len(summary) else 0
+    parts = [f"{spec.describe()[0].upper()}{spec.describe()[1:]}: "
+             f"{_plural(n_lams, 'load factor')} x {_plural(n_states, 'initial state')}."]
+    bounded = bool(np.isfinite(l1).any() and np.isfinite(l2).any())
+    if bounded:
+        band = summary[(summary["lam"] > summary["lam1"]) & (summary["lam"] <= summary["lam2"])]
+        wb_min = band["W_star_min"].max() if len(band) else float("nan")
+        wb_max = band["W_star_max"].max() if len(band) else float("nan")
+        parts.append(
+            f"By the bounds (computed, LP certificates), the initial state decides whether the "
+            f"system shakes down for lam1 = {stat(l1)} < lam < lam2 = {stat(l2)} (lam1/lam2 = "
+            f"{stat(l1 / l2, 3)}): there min {D} = {sig(wb_min)}{unit} and max {D} up to "
+            f"{sig(wb_max)}{unit} ({_plural(len(band), 'load factor')} of this study).")
+    else:
+        status = ", ".join(sorted(set(realisations["bounds_status"].astype(str))))
+        parts.append(f"The bounds are undefined for this model (status {status}; shakedown "
+                     "bounds explains why), so no band of load factors comes from them.")
+
+    def where(x, lam2):  # a load factor, and its ratio to lam2 when that is defined
+        x = np.asarray(x, float)
+        ratio = x / lam2
+        return stat(x) + (f" (lam/lam2 = {stat(ratio, 3)})" if np.isfinite(ratio).any() else "")
+
     first, last = [], []
     for _, g in summary.groupby("realisation", sort=True):
         wmax, wmin = g["W_star_max"].to_numpy(float), g["W_star_min"].to_numpy(float)
-        differ = (wmax - wmin > SAME_RTOL * np.abs(wmax)) & (wmax > 0)
+        differ = shown_differ(wmin, wmax) & (wmax > 0)
         lam = g["lam"].to_numpy(float)
         if differ.any():
-            first.append(lam[differ].min() / g["lam2"].iloc[0])
-            last.append(lam[differ].max() / g["lam2"].iloc[0])
+            first.append((lam[differ].min(), g["lam2"].iloc[0]))
+            last.append((lam[differ].max(), g["lam2"].iloc[0]))
     if first:
-        parts.append(f"In this study min and max W* differ (the initial state matters) from "
-                     f"lam/lam2 = {stat(np.array(first), 3)} to {stat(np.array(last), 3)}.")
+        f, lf = np.array(first).T
+        la_, ll = np.array(last).T
+        parts.append(f"In this study min and max {D} differ in the table (4 significant digits: "
+                     f"the initial state matters) from lam = {where(f, lf)} to "
+                     f"{where(la_, ll)}.")
     sub = summary[summary["lam"] < summary["lam1"]]
     nslip, nruns = int(sub["n_cyclic_slip"].sum()), int(sub["n_states"].sum())
     below = regs[regs["region"] == "lam_adj to lam1"]
-    parts.append(f"Below lam1, {nslip} of {nruns} runs ended in cyclic slip (the seed: none)"
-                 + (f"; between lam_adj = {stat(la)} and lam1: {int(below['n_cyclic_slip'].sum())}"
-                    f" of {int(below['n_runs'].sum())}" if len(below) else "") + ".")
+    seed = " (the seed: none)" if spec.source is None else ""
+    if nruns:
+        parts.append(f"Below lam1, {nslip} of {nruns} runs ended in cyclic slip{seed}"
+                     + (f"; between lam_adj = {stat(la)} and lam1: "
+                        f"{int(below['n_cyclic_slip'].sum())} of {int(below['n_runs'].sum())}"
+                        if len(below) else "") + ".")
     lu, ls = lamu["lam_u"].to_numpy(float), lamu["lam_same"].to_numpy(float)
     if np.isfinite(lu).any():
-        parts.append(f"Every crack slips in every steady cycle from lam_u = {stat(lu)} "
-                     f"(lam_u/lam2 = {stat(lu / l2, 3)}) on.")
+        parts.append(f"Every {word} slips in every steady cycle from lam_u = {where(lu, l2)} on.")
     else:
-        parts.append("No load factor of the study made every crack slip in every steady cycle "
-                     "(lam_u not reached: raise lam_span).")
+        fix = ("raise lam_span" if spec.lams == "auto"
+               else f"add load factors above {sig(max(spec.lams))} to lams")
+        parts.append(f"No load factor of the study made every {word} slip in every steady "
+                     f"cycle (lam_u not reached: {fix}).")
     if np.isfinite(ls).any():
-        parts.append(f"The dissipation is the same from every initial state (to {SAME_RTOL:g}) "
-                     f"for lam >= {stat(ls)} (lam/lam2 = {stat(ls / l2, 3)}).")
+        parts.append(f"The dissipation is the same from every initial state (to {SAME_RTOL:g} "
+                     f"relative) for lam >= {where(ls, l2)}.")
     else:
-        parts.append("Min and max W* still differ at the largest load factor of the study.")
+        top = summary.sort_values("lam", kind="stable").groupby("realisation").tail(1)
+        wmin, wmax = top["W_star_min"].to_numpy(float), top["W_star_max"].to_numpy(float)
+        if len(top) and np.all(wmax == 0):
+            parts.append("At the largest load factor of the study every initial state shook "
+                         f"down ({D} = 0).")
+        elif len(top) and not shown_differ(wmin, wmax).any():
+            parts.append(f"At the largest load factor of the study min and max {D} agree to 4 "
+                         f"significant digits but not to {SAME_RTOL:g} relative.")
+        else:
+            parts.append(f"Min and max {D} still differ at the largest load factor of the "
+                         "study.")
     return " ".join(parts)

@@ -25,11 +25,12 @@ from ..model.errors import InputError
 from .crack_study import SweepResult, lam_grid, realisation_model, run_sweep, study_tasks
 from .engine import Task, TaskRun, run_tasks
 from .runs import initial_slip, initial_slips, run_row
-from .spec import SweepSpec
+from .spec import SweepSpec, SystemSource
 from .workers import Workers
 
 __all__ = [
     "SweepSpec",
+    "SystemSource",
     "Task",
     "TaskRun",
     "Workers",

@@ -339,7 +339,7 @@ def test_bad_input_messages():
     s, load = random_coupled(0, 2)
     with pytest.raises(sd.ShapeError, match=r"initial_slip must have shape \(2,\)"):
         sd.solve_cycles(s, load, 1.0, initial_slip=[0.0, 0.0, 0.0])
-    with pytest.raises(sd.InputError, match="initial_gap must be >= 0.*node 1 has -0.1"):
+    with pytest.raises(sd.InputError, match="initial_gap must be >= 0.*node 2 has -0.1"):
         sd.solve_cycles(s, load, 1.0, initial_gap=[0.0, -0.1])
     with pytest.raises(sd.InputError, match="initial_slip must be finite"):
         sd.solve_cycles(s, load, 1.0, initial_slip=[np.inf, 0.0])

@@ -47,7 +47,7 @@ def test_validation_messages():
         sd.DiscreteSystem([[1.0, 0.5], [0.0, 1.0]], np.zeros((2, 2)), np.eye(2), 0.3)
     with pytest.raises(sd.NotPositiveDefiniteError, match="must be positive definite"):
         sd.DiscreteSystem(np.eye(2), 2 * np.eye(2), np.eye(2), 0.3)
-    with pytest.raises(sd.InputError, match="friction must be >= 0; node 1"):
+    with pytest.raises(sd.InputError, match="friction must be >= 0; node 2"):
         sd.DiscreteSystem(np.eye(2), np.zeros((2, 2)), np.eye(2), [0.1, -0.2])
     with pytest.raises(sd.ShapeError, match=r"friction must be a scalar or have shape \(2,\)"):
         sd.DiscreteSystem(np.eye(2), np.zeros((2, 2)), np.eye(2), [0.1, 0.2, 0.3])

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import shakedown as sd
+from shakedown.model.numbers import sig
 from shakedown.scenes.files import load_scene, run_scene, scene_from_string
 from shakedown.scenes.output import OutputFolder, Progress
 
@@ -132,8 +133,9 @@ def test_stability_verdict_compares_friction_with_mu_star(f, word, tmp_path):
     res, _ = _run(scene_from_string(STABILITY.format(f=f)), tmp_path, "stability")
     assert res["mu_star"] == pytest.approx(4.0, rel=1e-12)  # A / |B|, a 1x1 eigenproblem
     relation = "is below" if word == "Stable" else "is at or above"
-    assert res["verdict"].startswith(f"{word}: friction {f:.4g} {relation} the critical friction "
-                                     "mu* = 4 ")
+    # 4 significant digits with their trailing zeros (issue 25)
+    assert res["verdict"].startswith(f"{word}: friction {sig(f)} {relation} the critical friction "
+                                     "mu* = 4.000 ")
 
 
 def test_stability_growth_rate_is_called_s_not_lam(tmp_path):

@@ -179,12 +179,43 @@ def test_verdict_states_the_band_cyclic_slip_below_lam1_and_lam_u():
         all_slip=[False, False, False, False, True], lam1=1.0, lam2=2.0, lam_adj=0.5))
     lu = lam_u(s)
     text = verdict(SweepSpec(), rel, s, lu, regions(s, lu))
-    assert "lam1 = 1 < lam < lam2 = 2" in text and "max W* up to 0.3" in text
-    assert "from lam/lam2 = 0.4 to 1.5" in text  # where min and max differ
+    # 4 significant digits with trailing zeros, ratios 3 (issue 25)
+    assert "lam1 = 1.000 < lam < lam2 = 2.000" in text and "max W* up to 0.3000" in text
+    assert "from lam = 0.8000 (lam/lam2 = 0.400) to 3.000 (lam/lam2 = 1.50)" in text
     assert "Below lam1, 1 of 8 runs ended in cyclic slip" in text
-    assert "between lam_adj = 0.5 and lam1: 1 of 4" in text
-    assert "from lam_u = 4 (lam_u/lam2 = 2) on" in text
-    assert "for lam >= 4 (lam/lam2 = 2)" in text
+    assert "between lam_adj = 0.5000 and lam1: 1 of 4" in text
+    assert "from lam_u = 4.000 (lam/lam2 = 2.00) on" in text
+    assert "for lam >= 4.000 (lam/lam2 = 2.00)" in text
+    assert "1 realisation of 100 cracks" in text and "5 load factors x 4 initial states" in text
+
+
+def test_verdict_uses_the_tables_digits_and_the_options_that_exist():
+    # issue 25: W* 54.753536 and 54.753976 (8e-6 relative apart) print as 54.75 and 54.75 in the
+    # table; the verdict said "min and max W* differ ... to 2.28" there
+    from shakedown.scenes.analyses.sweep import format_table
+    from shakedown.studies.spec import SweepSpec
+    from shakedown.studies.summary import regions, verdict
+
+    rel = pd.DataFrame(dict(realisation=[0], lam1=[1.0], lam2=[2.0], lam_adj=[1.0]))
+    s = pd.DataFrame(dict(
+        realisation=0, point=["l0", "l1", "l2"], lam=[0.5, 3.0, 4.56], x=[0.25, 1.5, 2.28],
+        W_star_min=[0.0, 1.0, 54.753536], W_star_max=[0.0, 1.2, 54.753976], n_states=4,
+        n_cyclic_slip=[0, 4, 4], n_steady=4, n_shook_down=[4, 0, 0], all_slip=False,
+        frac_slip_min=0.5, frac_slip_max=0.6, frac_open_min=0.0, frac_open_max=0.0,
+        max_from="zero", lam1=1.0, lam2=2.0, lam_adj=1.0))
+    lu = lam_u(s)
+    spec = SweepSpec(lams=(0.5, 3.0, 4.56))
+    text = verdict(spec, rel, s, lu, regions(s, lu))
+    table = format_table(s)
+    assert table.count("54.75") == 2  # the table shows them equal ...
+    assert "to 3.000 (lam/lam2 = 1.50)." in text  # ... so the verdict's "differ" ends at 3.0
+    assert "2.28" not in text
+    assert "agree to 4 significant digits but not to 1e-06" in text
+    # listed load factors: lam_span is unused, so the advice names lams
+    assert "raise lam_span" not in text and "add load factors above 4.560 to lams" in text
+    one = verdict(SweepSpec(lams=(0.5,)), rel, s.iloc[:1], lam_u(s.iloc[:1]),
+                  regions(s.iloc[:1], lam_u(s.iloc[:1])))
+    assert "1 load factor x 4 initial states" in one and "load factors)" not in one
 
 
 def test_study_on_truncated_sparse_networks(tmp_path):

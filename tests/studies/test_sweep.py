@@ -424,7 +424,7 @@ def test_sweep_analysis_writes_tables_plots_and_resumes(tmp_path, capsys):
     summary = analysis.run(ctx, scene.analyses["sweep"])
     n_points = summary["n_runs"] // 2
     assert n_points >= 3 + 5 and summary["lam1"] <= summary["lam2"]
-    assert summary["verdict"].startswith("1 realisation(s) of 8 cracks")
+    assert summary["verdict"].startswith("1 realisation of 8 cracks, friction 0.6: ")
     for name in ("sweep_runs.csv", "sweep_runs.parquet", "sweep_summary.csv", "sweep.json",
                  "sweep_regions.csv", "sweep_verdict.txt", "dissipation_vs_lam.png",
                  "fractions_vs_lam.png"):
@@ -439,5 +439,5 @@ def test_sweep_analysis_writes_tables_plots_and_resumes(tmp_path, capsys):
     ctx_bad = AnalysisContext(None, None, None, out, CliProgress(enabled=False), None, bad)
     from shakedown.model.errors import SceneError
 
-    with pytest.raises(SceneError, match="crack_network"):
+    with pytest.raises(SceneError, match="needs its built system and load"):
         analysis.run(ctx_bad, bad.analyses["sweep"])

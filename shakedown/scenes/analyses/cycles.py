@@ -22,7 +22,10 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from ...evolution.verdicts import cycles_verdict
 from ...model.errors import SceneError, SolverError
+
+__all__ = ["OPTIONS", "run", "cycles_verdict"]
 
 OPTIONS = {
     "lam": (float, 1.0, "load factor lam >= 0"),
@@ -113,7 +116,12 @@ def run(ctx, options: dict) -> dict:
     if run_ is not None and run_.status == "non_finite":  # overflow is a failure (issue 10)
         raise SolverError(f"[analyses.cycles] lam = {lam:g}: {run_.message}", partial=run_)
     summary = _summary(run_, lam, options, sc, study)
-    verdict = cycles_verdict(run_, lam, _units(ctx)["energy"], study)
+    exact = None
+    if getattr(run_, "within_sampling_error", False):  # the bounds of the exact load decide
+        from ...bounds.engine import shakedown_bounds
+
+        exact = shakedown_bounds(system, load, separation=False)
+    verdict = cycles_verdict(run_, lam, _units(ctx)["energy"], study, bounds=exact)
     summary = {"verdict": verdict, **summary}
     ctx.output.write_json("cycles.json", summary)
     ctx.output.write_table("dissipation.csv", _dissipation_table(run_))
@@ -156,13 +164,15 @@ class _CycleProgress:
 
 
 def _from_one(table):
-    """A copy of a result table with nodes numbered from 1 (columns ``node``, ``stuck``,
+    """A copy of a result table with nodes and initial states numbered from 1 (columns
+    ``node``, ``state`` (the uniqueness study's initial state), ``stuck``,
     ``initial_slip_<j>``, ``steady_slip_<j>``), as in everything a person reads."""
     import re
 
     t = table.copy()
-    if "node" in t:
-        t["node"] = t["node"].astype(int) + 1
+    for col in ("node", "state"):
+        if col in t and pd.api.types.is_integer_dtype(t[col]):
+            t[col] = t[col].astype(int) + 1
     if "stuck" in t:
         t["stuck"] = [",".join(str(int(j) + 1) for j in str(x).split(",") if j.strip() != "")
                       for x in t["stuck"]]
@@ -227,78 +237,6 @@ def _units(ctx) -> dict:
     if scene is not None:
         return scene.units
     return {"force": "[force]", "length": "[length]", "energy": "[force x length]"}
-
-
-def _slipping_nodes(run) -> list[int]:
-    """Nodes (numbered from 1) that slip somewhere in the steady cycle."""
-    t = run.steady_table
-    if t is None or len(t) == 0 or "state" not in t:
-        return []
-    slipping = t[t["state"].isin(["forward", "backward", "slip"])]["node"].unique()
-    return sorted(int(j) + 1 for j in slipping)
-
-
-def _node_list(nodes) -> str:
-    nodes = [str(j) for j in nodes]
-    word = "node" if len(nodes) == 1 else "nodes"
-    return f"{word} {', '.join(nodes[:12])}" + (", ..." if len(nodes) > 12 else "")
-
-
-def cycles_verdict(run, lam: float, energy: str = "[force x length]", study=None) -> str:
-    """Plain sentences: shook down after k cycles / cyclic slip with W per cycle / no steady state.
-
-    Parameters
-    ----------
-    run : CycleRun
-    lam : float
-        Load factor of the run.
-    energy : str
-        Unit of energy (force x length) for ``W``.
-    study : UniquenessStudy, optional
-        Adds a sentence on whether the dissipation depends on the initial state.
-    """
-    at = f"At lam = {lam:.4g}"
-    if run.status == "periodic" and run.shook_down:
-        k = max(int(run.cycles_to_steady), 0)
-        when = "from the first cycle on" if k == 0 else f"after {k} cycle{'s' * (k != 1)}"
-        text = f"{at}, it shook down {when}: no node slips in the steady state (W = 0)."
-        if getattr(run, "within_sampling_error", False):  # issue 10 item 9
-            text += (f" But this lies within the load's sampling error "
-                     f"({run.sampling_error:.3g}): the exact load breaks a stick constraint at "
-                     "the final state; raise steps_per_cycle to decide.")
-    elif run.status == "periodic":
-        slip = _slipping_nodes(run)
-        n = int(np.shape(run.final_slip)[0])
-        which = ""
-        if len(slip) > 12:
-            which = f", {len(slip)} of {n} nodes slip ({_node_list(slip)})"
-        elif slip:
-            which = f", {_node_list(slip)} slip"
-        text = (f"{at}, cyclic slip: W = {run.steady_dissipation:.4g} {energy} per cycle, "
-                f"period {int(run.period)}{which}.")
-    elif run.status == "not_converged":
-        W = np.asarray(run.dissipation, float)
-        last = f" (last cycle: W = {W[-1]:.4g} {energy})" if W.size else ""
-        n = int(run.n_cycles)
-        text = (f"{at}, it did not reach a steady state in {n} cycle{'s' * (n != 1)}{last}; "
-                "raise max_cycles to go on.")
-    else:
-        text = f"{at}, the run stopped before a steady state: {run.message}"
-    if study is not None:
-        t = study.table
-        W = t["steady_dissipation"].to_numpy(float)
-        n = int(study.n_states)
-        if study.unique_dissipation:
-            text += (f" From {n} initial states the steady dissipation is the same "
-                     f"(spread {study.dissipation_spread:.3g} {energy}).")
-        elif np.isfinite(W).any():
-            text += (f" From {n} initial states the steady dissipation differs: W from "
-                     f"{np.nanmin(W):.4g} to {np.nanmax(W):.4g} {energy} per cycle "
-                     f"({study.fraction_shook_down:.0%} of them shook down); the initial state "
-                     "matters.")
-        else:
-            text += f" None of the {n} initial states reached a steady state."
-    return text
 
 
 def _plots(ctx, run, study, lam, options):

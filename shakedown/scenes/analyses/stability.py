@@ -28,6 +28,7 @@ import numpy as np
 import pandas as pd
 
 from ...model.errors import SceneError
+from ...model.numbers import sig
 
 OPTIONS = {
     "partition": (str, "all-slip", "'all-slip', 'states' (see states) or 'welded'"),
@@ -82,7 +83,7 @@ def _partition(ctx, options):
 
 
 def _fmt(x) -> str:
-    return f"{float(x):.4g}"
+    return sig(x)
 
 
 def stability_verdict(res, friction: float, part, growth=None) -> str:

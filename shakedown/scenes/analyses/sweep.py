@@ -1,13 +1,20 @@
-"""The ``sweep`` analysis: the Monte Carlo crack-network study (issue 4; seed 002 Fig. 11).
+"""The ``sweep`` analysis: dissipation against the load factor, from many initial states, for
+every model kind (issues 4, 25; seed 002 Fig. 11).
 
-``shakedown sweep SCENE`` (and the default job of ``shakedown run``) draws
-``n_realisations`` crack sets with the scene's ``[model]`` keys (``kind = "crack_network"``),
-computes ``lam1``, ``lam2``, ``lam_adj`` of each, then the steady dissipation ``W*`` of every
-(realisation, load factor, initial state) at load factors chosen from each realisation's bounds
-(inside ``(lam1, lam2)``, between ``lam_adj`` and ``lam1``, refined where min and max differ),
-in parallel (local processes, or a Dask cluster).  Rows are appended to ``sweep_store/`` in the
-output folder as they arrive: the same command run again resumes an interrupted sweep
-(``fresh = true`` starts over; a store that is a symbolic link is refused).
+``shakedown sweep SCENE`` (and the default job of ``shakedown run``) computes ``lam1``,
+``lam2``, ``lam_adj`` of the scene's model, then the steady dissipation of every (realisation,
+load factor, initial state) at load factors chosen from the bounds (inside ``(lam1, lam2)``,
+between ``lam_adj`` and ``lam1``, refined where min and max differ) or listed (``lams``, or
+its alias ``lam``: ``--set lam=[0.9,1.0,1.1]``), in parallel (local processes, or a Dask
+cluster).  What a realisation is depends on the model, not on its kind's name: a model whose
+builder says it ``draws_realisations`` (random Kachanov crack sets) is drawn anew
+``n_realisations`` times and its dissipation normalised (``W*``); every other model (matrices,
+files, FE, half-plane, a crack set from a file, ...) is the scene's one built system
+(:class:`~shakedown.studies.spec.SystemSource`), with ``W`` in its energy unit.  Rows are
+appended to ``sweep_store/`` in the output folder as they arrive: the same command run again
+resumes an interrupted sweep (``fresh = true`` starts over; a store that is a symbolic link is
+refused).  Realisations and initial states are numbered from 1 in the CSV/Parquet/JSON tables
+and on stdout (the store keeps the 0-based indices of the Python API).
 
 Writes ``sweep_runs.csv`` (and ``.parquet``), ``sweep_summary.csv`` (min / max ``W*`` per
 realisation and ``lam``), ``sweep_regions.csv`` (runs in cyclic slip per band of load factors),
@@ -28,12 +35,18 @@ from __future__ import annotations
 
 import shutil
 
+from ...model.numbers import sig
+
 #: Options that choose where the sweep runs, not its result (reset in scene.resolved.toml).
 WHERE_IT_RUNS = ("scheduler",)
 
+#: ``lam`` (as in the other analyses) names the listed load factors ``lams``.
+ALIASES = {"lam": "lams"}
+
 OPTIONS = {
-    "n_realisations": (int, 1, "number of random crack sets"),
-    "lams": ((str, list), "auto", "'auto' (from each realisation's bounds) or load factors"),
+    "n_realisations": (int, 1, "number of random crack sets (1 for every other model)"),
+    "lams": ((str, list, float), "auto",
+             "'auto' (from each realisation's bounds) or load factors (alias: lam)"),
     "n_lams": (int, 12, "evenly spaced points in lam / lam2 with lams = 'auto'"),
     "lam_span": (list, [0.5, 2.5], "range of lam / lam2 of the evenly spaced points"),
     "n_band": (int, 5, "extra points inside (lam1, lam2)"),
@@ -57,22 +70,42 @@ _SPEC_OPTIONS = ("n_realisations", "lams", "n_lams", "lam_span", "n_band", "n_ad
                  "n_states", "state_scale", "method", "steps_per_cycle", "max_cycles", "tol")
 
 
-def spec_from_scene(scene, options: dict):
-    """The :class:`~shakedown.sweep.SweepSpec` of a scene and these options."""
-    from ...model.errors import SceneError
-    from ...studies.sweep import SweepSpec
+def spec_from_scene(scene, options: dict, system=None, load=None):
+    """The :class:`~shakedown.sweep.SweepSpec` of a scene and these options.
 
-    if scene is None or scene.model.get("kind") != "crack_network":
-        kind = None if scene is None else scene.model.get("kind")
-        raise SceneError(
-            f"the sweep analysis needs [model] kind = 'crack_network'; got {kind!r} "
-            "(for other systems use shakedown.sweep.system_sweep from Python)")
+    A model whose builder ``draws_realisations`` (random crack networks) gives the crack
+    study; any other gives the sweep of the scene's built ``system`` and ``load`` (needed then).
+    """
+    from ...model.errors import SceneError
+    from ...studies.sweep import SweepSpec, SystemSource
+    from ..files import builder_module
+
+    if scene is None:
+        raise SceneError("the sweep analysis needs a scene")
+    kind = scene.model.get("kind")
     opts = {k: options[k] for k in _SPEC_OPTIONS}
-    if options["stress_scale"] > 0:
-        opts["stress_scale"] = options["stress_scale"]
+    if isinstance(opts["lams"], float):
+        opts["lams"] = [opts["lams"]]
     model = {k: v for k, v in scene.model.items() if k != "kind"}
+    draws = getattr(builder_module(kind), "draws_realisations", None)
     try:
-        return SweepSpec.from_scene(model, scene.load, opts)
+        if draws is not None and draws(model):
+            if options["stress_scale"] > 0:
+                opts["stress_scale"] = options["stress_scale"]
+            return SweepSpec.from_scene(model, scene.load, opts)
+        if system is None or load is None:
+            raise SceneError(f"{scene.label}: the sweep of a {kind!r} model needs its built "
+                             "system and load")
+        if options["n_realisations"] != 1:
+            raise SceneError(
+                f"{scene.label}: [analyses.sweep] n_realisations = {options['n_realisations']}: "
+                f"a {kind!r} model is one given system (only random crack networks draw "
+                "several); remove the key or set it to 1")
+        energy = getattr(scene, "units", {}).get("energy", "[force x length]")
+        source = SystemSource.of(system, load, scene.name, energy)
+        return SweepSpec(source=source, **opts)
+    except SceneError:
+        raise
     except (TypeError, ValueError) as exc:
         raise SceneError(f"{scene.label}: [analyses.sweep] / [model]: {exc}") from exc
 
@@ -109,16 +142,17 @@ def scheduler_of(scene, options: dict) -> str | None:
     return options.get("scheduler") or os.environ.get("SHAKEDOWN_SCHEDULER") or None
 
 
-def format_table(summary) -> str:
+def format_table(summary, name: str = "W*") -> str:
     """The per (realisation, lam) summary as a fixed-width text table (nodes and realisations
-    numbered from 1)."""
-    head = (f"{'real':>4} {'lam':>8} {'lam/lam2':>8} {'W*_min':>10} {'W*_max':>10} "
+    numbered from 1; ``W`` to 4 significant digits, the tolerance of the verdict's "min and
+    max differ"); ``name`` heads the dissipation columns."""
+    head = (f"{'real':>4} {'lam':>8} {'lam/lam2':>8} {name + '_min':>10} {name + '_max':>10} "
             f"{'steady':>6} {'shook':>5} {'slip':>9} {'open':>9}  max from")
     lines = [head]
     for _, r in summary.iterrows():
         lines.append(
-            f"{int(r.realisation) + 1:4d} {r.lam:8.4f} {r.x:8.4f} {r.W_star_min:10.4g} "
-            f"{r.W_star_max:10.4g} {int(r.n_steady):6d} {int(r.n_shook_down):5d} "
+            f"{int(r.realisation) + 1:4d} {r.lam:8.4f} {r.x:8.4f} {sig(r.W_star_min):>10} "
+            f"{sig(r.W_star_max):>10} {int(r.n_steady):6d} {int(r.n_shook_down):5d} "
             f"{r.frac_slip_min:4.2f}-{r.frac_slip_max:4.2f} {r.frac_open_min:4.2f}-"
             f"{r.frac_open_max:4.2f}  {r.max_from}")
     return "\n".join(lines)
@@ -129,31 +163,39 @@ def run(ctx, options: dict) -> dict:
     from ...studies.safe_files import refuse_link, write_atomic
 
     scene = getattr(ctx, "scene", None)
-    spec = spec_from_scene(scene, options)
+    spec = spec_from_scene(scene, options, ctx.system, ctx.load)
     scheduler = scheduler_of(scene, options)
     store = refuse_link(ctx.output.path / "sweep_store", "store")
     if options["fresh"] and store.exists():
         shutil.rmtree(store)
     n_lams = (spec.n_lams + spec.n_band + spec.n_adj + spec.n_refine if spec.lams == "auto"
               else len(spec.lams))
-    ctx.log(f"sweep: {spec.n_realisations} realisation(s) of {spec.n_cracks} cracks x "
-            f"about {n_lams} load factors x {spec.n_states} initial states; store {store}")
+    ctx.log(f"sweep: {spec.describe()} x {'about ' * (spec.lams == 'auto')}{n_lams} load "
+            f"factor{'s' * (n_lams != 1)} x {spec.n_states} initial states; store {store}")
     res = run_sweep(spec, store, n_workers=options["n_workers"] or None, scheduler=scheduler,
                     progress=ctx.progress.enabled if hasattr(ctx.progress, "enabled") else True,
                     format=options["store_format"])
-    ctx.output.write_table("sweep_runs.csv", res.runs)
+    runs = _from_one(res.runs)
+    ctx.output.write_table("sweep_runs.csv", runs)
     try:
-        ctx.output.write_table("sweep_runs.parquet", res.runs)
+        ctx.output.write_table("sweep_runs.parquet", runs)
     except ImportError:  # pyarrow is optional
         pass
-    ctx.output.write_table("sweep_summary.csv", res.summary)
-    ctx.output.write_table("sweep_regions.csv", res.regions)
-    ctx.output.write_table("sweep_realisations.csv", res.realisations.drop(columns="safe_state"))
+    ctx.output.write_table("sweep_summary.csv", _from_one(res.summary))
+    ctx.output.write_table("sweep_regions.csv", _from_one(res.regions))
+    ctx.output.write_table("sweep_realisations.csv",
+                           _from_one(res.realisations.drop(columns="safe_state")))
     ctx.output.write_table("sweep_bands.csv", res.bands)
-    ctx.output.write_json("sweep.json", res.to_dict())
+    digest = res.to_dict()
+    for key in ("realisations", "summary", "regions"):  # numbered from 1, as the CSV tables
+        digest[key] = [{**r, **{c: int(r[c]) + 1 for c in ("realisation", "state") if c in r}}
+                       for r in digest[key]]
+    ctx.output.write_json("sweep.json", digest)
     write_atomic(ctx.output.path / "sweep_verdict.txt", (res.verdict + "\n").encode())
-    print("\nW* per realisation and load factor (min / max over initial states):")
-    print(format_table(res.summary))
+    D = spec.dissipation_name
+    unit = f" {spec.source.energy_unit}" if spec.source is not None else ""
+    print(f"\n{D}{unit} per realisation and load factor (min / max over initial states):")
+    print(format_table(res.summary, D))
     if options["plots"]:
         import matplotlib
 
@@ -171,10 +213,12 @@ def run(ctx, options: dict) -> dict:
         ctx.output.save_figure("fractions_vs_lam.png", fig)
     r = res.realisations
     runs = res.runs
+    size = ({"n_nodes": spec.source.n_nodes} if spec.source is not None
+            else {"n_cracks": spec.n_cracks})
     return {
         "verdict": res.verdict,
         "n_realisations": int(len(r)),
-        "n_cracks": spec.n_cracks,
+        **size,
         "lam1": float(r["lam1"].mean()),
         "lam2": float(r["lam2"].mean()),
         "lam_adj": float(r["lam_adj"].mean()),
@@ -189,3 +233,13 @@ def run(ctx, options: dict) -> dict:
         "n_resumed": res.n_resumed,
         "wall_s": res.wall_seconds,
     }
+
+
+def _from_one(table):
+    """A copy of a sweep table with realisations and initial states numbered from 1 (columns
+    ``realisation``, ``state``), as on stdout and in everything a person reads."""
+    t = table.copy()
+    for col in ("realisation", "state"):
+        if col in t:
+            t[col] = t[col].astype(int) + 1
+    return t

@@ -85,6 +85,15 @@ def _stress(key, value):
     return tuple(float(v) for v in value)
 
 
+def draws_realisations(model: dict) -> bool:
+    """The sweep draws this model anew per realisation (random Kachanov crack sets from the
+    sampling keys, one friction coefficient); a crack set read from a ``file``, the BEM model,
+    per-crack friction or non-uniform weighting are swept as the one given system."""
+    return ("file" not in model and model.get("method", "kachanov") == "kachanov"
+            and model.get("weighting", "uniform") == "uniform"
+            and not isinstance(model.get("friction"), list))
+
+
 def build(model: dict, load: dict, scene_dir: Path):
     import numpy as np
 
