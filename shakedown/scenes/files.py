@@ -142,25 +142,87 @@ def resolve_scene_path(scene: str | Path | None) -> Path:
 
 
 def load_scene(scene: str | Path | None = None) -> Scene:
-    """Read and validate a scene file (or a built-in scene by name)."""
+    """Read and validate a scene file (or a built-in scene by name, or a run's manifest.json).
+
+    The file is checked before it is parsed (size at most
+    :data:`~shakedown.model.limits.MAX_SCENE_BYTES`, UTF-8 text) and after (nesting at most
+    :data:`~shakedown.model.limits.MAX_NESTING` levels); a manifest goes through the same
+    refusals as a scene file (no Dask scheduler or other "where it runs" option from a file).
+    """
     path = resolve_scene_path(scene)
     if path.suffix == ".json":  # a run's manifest.json: its resolved scene (scenes/manifest.py)
         from .manifest import scene_from_manifest
 
-        return scene_from_dict(scene_from_manifest(path), path=path)
-    try:
-        raw = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError(f"{path}: not valid TOML: {exc}") from exc
+        raw = scene_from_manifest(path)
+    else:
+        raw = parse_toml(read_text(path, "scene file"), str(path))
+    refuse_where_it_runs(raw, str(path))
     return scene_from_dict(raw, path=path)
+
+
+def read_text(path, what: str = "scene file") -> str:
+    """The UTF-8 text of a scene or manifest file, size-checked first; :class:`SceneError`
+    naming the file for a file too large, unreadable or not UTF-8 (e.g. UTF-16)."""
+    from ..model.limits import MAX_SCENE_BYTES, check_file_size
+
+    try:
+        check_file_size(path, what, MAX_SCENE_BYTES)
+        data = Path(path).read_bytes()
+    except InputError as exc:
+        raise SceneError(str(exc)) from None
+    except OSError as exc:
+        raise SceneError(f"{path}: cannot read the {what} ({exc.strerror or exc})") from None
+    if data.startswith((b"\xff\xfe", b"\xfe\xff")):
+        raise SceneError(f"{path}: the {what} is UTF-16 text; save it as UTF-8")
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise SceneError(f"{path}: the {what} is not UTF-8 text (byte {exc.start}: "
+                         f"{exc.reason}); save it as UTF-8") from None
+
+
+def parse_toml(text: str, label: str) -> dict:
+    """``tomllib.loads(text)`` with every failure a :class:`SceneError` naming ``label``
+    (deep nesting, which makes the parser recurse, included)."""
+    from ..model.limits import MAX_NESTING, check_nesting
+
+    try:
+        raw = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(f"{label}: not valid TOML: {exc}") from exc
+    except (RecursionError, MemoryError):
+        raise SceneError(f"{label}: tables or lists nested too deeply (more than {MAX_NESTING} "
+                         "levels) or too large to parse") from None
+    try:
+        check_nesting(label, raw)
+    except InputError as exc:
+        raise SceneError(str(exc)) from None
+    return raw
+
+
+def refuse_where_it_runs(raw: dict, label: str) -> None:
+    """:class:`SceneError` if a file's ``[analyses.*]`` tables set an option that chooses where
+    the work runs (``WHERE_IT_RUNS``, e.g. the sweep's Dask ``scheduler``): connecting to a
+    host is trusted like running its code, so it comes from the command line only."""
+    analyses = raw.get("analyses") if isinstance(raw, dict) else None
+    if not isinstance(analyses, dict):
+        return
+    for name, table in analyses.items():
+        if name not in ANALYSES or not isinstance(table, dict):
+            continue
+        module = analysis_module(name, label)
+        for key in getattr(module, "WHERE_IT_RUNS", ()):
+            if table.get(key) not in (None, module.OPTIONS[key][1]):
+                raise SceneError(
+                    f"{label}: [analyses.{name}] {key} = {table[key]!r}: a scene or manifest "
+                    f"file may not set {key!r} (it chooses a host to connect to, trusted like "
+                    f"running its code); remove it and pass --set {key}=... on the command line "
+                    "(or set SHAKEDOWN_SCHEDULER)")
 
 
 def scene_from_string(text: str, directory: Path | None = None) -> Scene:
     """Parse a scene from TOML text (files it names are looked up in ``directory``)."""
-    try:
-        raw = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError(f"<string>: not valid TOML: {exc}") from exc
+    raw = parse_toml(text, "<string>")
     path = (Path(directory) / "<string>.toml") if directory is not None else None
     return scene_from_dict(raw, path=path)
 

@@ -126,7 +126,7 @@ def format_table(summary) -> str:
 
 def run(ctx, options: dict) -> dict:
     from ...studies.crack_study import run_sweep
-    from ...studies.safe_files import refuse_link, write_atomic
+    from ...studies.safe_files import refuse_link
 
     scene = getattr(ctx, "scene", None)
     spec = spec_from_scene(scene, options)
@@ -151,7 +151,7 @@ def run(ctx, options: dict) -> dict:
     ctx.output.write_table("sweep_realisations.csv", res.realisations.drop(columns="safe_state"))
     ctx.output.write_table("sweep_bands.csv", res.bands)
     ctx.output.write_json("sweep.json", res.to_dict())
-    write_atomic(ctx.output.path / "sweep_verdict.txt", (res.verdict + "\n").encode())
+    ctx.output.write_text("sweep_verdict.txt", res.verdict + "\n")
     print("\nW* per realisation and load factor (min / max over initial states):")
     print(format_table(res.summary))
     if options["plots"]:
