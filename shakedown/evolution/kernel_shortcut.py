@@ -56,8 +56,9 @@ def increment_basis(D: np.ndarray, noise: float = RANK_RTOL, max_rank: int = MAX
     """Orthonormal rows spanning the rows of ``D`` (n_incr, m) to ``noise``, in ``O(n_incr m r)``.
 
     The rows are taken ``block`` at a time: each block is projected (twice, for round-off) off
-    the directions found so far, and the right singular vectors of what remains, with singular
-    values above ``2 noise (sqrt(rows) + sqrt(m))`` (:func:`drop_level`), are added.  Memory is
+    the directions found so far; if an entry of what remains exceeds the drop level
+    ``2 noise (sqrt(rows) + sqrt(m))`` (:func:`drop_level`), its right singular vectors with
+    singular values above that level are added.  Memory is
     bounded by the block and the basis (never a Gram matrix of all the increments); the scan
     stops as soon as more than ``max_rank`` directions are found.
 
@@ -78,14 +79,18 @@ def increment_basis(D: np.ndarray, noise: float = RANK_RTOL, max_rank: int = MAX
         directions.
     """
     m = D.shape[1]
+    return _basis((D[i0:i0 + block] for i0 in range(0, D.shape[0], block)), m, noise, max_rank)
+
+
+def _basis(blocks, m: int, noise: float, max_rank: int):
+    """:func:`increment_basis` of the row blocks ``blocks`` (an iterable of (rows, m) arrays)."""
     SB = np.zeros((0, m))
-    for i0 in range(0, D.shape[0], block):
-        R = D[i0:i0 + block]
+    for R in blocks:
         for _ in range(2):  # projection repeated: classical Gram-Schmidt twice is orthogonal
             R = R - (R @ SB.T) @ SB
         level = drop_level(noise, R.shape[0], m)
-        if not np.sqrt(np.einsum("ij,ij->", R, R)) > level:  # (Frobenius >= every singular value)
-            continue
+        if not np.abs(R).max(initial=0.0) > level:  # every row represented to the drop level
+            continue  # (the common case: O(rows m r) per block, no decomposition)
         _, sv, Vt = np.linalg.svd(R, full_matrices=False)
         new = Vt[sv > level]
         if SB.shape[0] + new.shape[0] > max_rank:
@@ -106,25 +111,36 @@ def state(n: int, qw: np.ndarray, pw: np.ndarray):
     ``(SB, SCc, RESP, T, key, free, coef, meta)``; disabled (``meta[ENABLED] = 0``) when the
     increments span more than :data:`MAX_RANK` directions.  Cost and memory linear in
     ``n_steps`` (:func:`increment_basis`)."""
-    with np.errstate(over="ignore", invalid="ignore"):
-        D = np.hstack([np.diff(qw, axis=0), np.diff(pw, axis=0)])  # (n_steps - 1, 2n)
-        dmax = float(np.abs(D).max(initial=0.0))
+    steps = qw.shape[0]
+
+    def blocks(scale=1.0):  # the increments W[j] - W[j - 1], BLOCK rows at a time (no copy
+        for i0 in range(0, steps - 1, BLOCK):  # of the whole period)
+            i1 = min(i0 + BLOCK, steps - 1)
+            with np.errstate(over="ignore", invalid="ignore"):
+                yield i0, np.hstack([qw[i0 + 1:i1 + 1] - qw[i0:i1],
+                                     pw[i0 + 1:i1 + 1] - pw[i0:i1]]) / scale
+
+    dmax = max((float(np.abs(D).max()) for _, D in blocks()), default=0.0)
     r, SB = 0, np.zeros((0, 2 * n))
     enabled = 1 if np.isfinite(dmax) else 0  # (an overflowing load: the general path reports)
     if enabled and dmax > 0:
         wmax = max(np.abs(qw).max(initial=0.0), np.abs(pw).max(initial=0.0))
         noise = min(max(RANK_RTOL, 16 * np.finfo(float).eps * wmax / dmax), 1e-6)
-        level = drop_level(noise, min(BLOCK, D.shape[0]), 2 * n)
-        B = increment_basis(D / dmax, noise)  # (D itself could overflow in products)
+        level = drop_level(noise, min(BLOCK, steps - 1), 2 * n)
+        # (scaled by dmax: D itself could overflow in products)
+        B = _basis((D for _, D in blocks(dmax)), 2 * n, noise, MAX_RANK)
         if B is None:
             enabled = 0
         else:
             SB, r = B, B.shape[0]
-    SCc = np.zeros((qw.shape[0], r))
+    SCc = np.zeros((steps, r))
     if enabled and dmax > 0:
+        err = 0.0
         with np.errstate(over="ignore", invalid="ignore"):
-            SCc[1:] = D @ SB.T  # row j: coefficients of W[j] - W[j - 1]
-            err = np.abs(D - SCc[1:] @ SB).max()
+            for i0, D in blocks():
+                C = SCc[i0 + 1:i0 + 1 + D.shape[0]]
+                C[:] = D @ SB.T  # row j: coefficients of W[j] - W[j - 1]
+                err = max(err, float(np.abs(D - C @ SB).max()))
         if not err <= level * dmax:  # a real direction dropped, or an overflow
             enabled = 0
     meta = np.zeros(4, np.int64)
