@@ -25,17 +25,12 @@ from __future__ import annotations
 import contextlib
 import importlib
 import importlib.resources
-import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..model.errors import InputError, SceneError
 from .output import check_plain_name
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
+from .reading import parse_toml, read_text, tomllib  # noqa: F401 (tomllib: re-exported)
 
 #: Model kinds and the module that builds each.
 MODEL_KINDS = {
@@ -158,46 +153,6 @@ def load_scene(scene: str | Path | None = None) -> Scene:
         raw = parse_toml(read_text(path, "scene file"), str(path))
     refuse_where_it_runs(raw, str(path))
     return scene_from_dict(raw, path=path)
-
-
-def read_text(path, what: str = "scene file") -> str:
-    """The UTF-8 text of a scene or manifest file, size-checked first; :class:`SceneError`
-    naming the file for a file too large, unreadable or not UTF-8 (e.g. UTF-16)."""
-    from ..model.limits import MAX_SCENE_BYTES, check_file_size
-
-    try:
-        check_file_size(path, what, MAX_SCENE_BYTES)
-        data = Path(path).read_bytes()
-    except InputError as exc:
-        raise SceneError(str(exc)) from None
-    except OSError as exc:
-        raise SceneError(f"{path}: cannot read the {what} ({exc.strerror or exc})") from None
-    if data.startswith((b"\xff\xfe", b"\xfe\xff")):
-        raise SceneError(f"{path}: the {what} is UTF-16 text; save it as UTF-8")
-    try:
-        return data.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise SceneError(f"{path}: the {what} is not UTF-8 text (byte {exc.start}: "
-                         f"{exc.reason}); save it as UTF-8") from None
-
-
-def parse_toml(text: str, label: str) -> dict:
-    """``tomllib.loads(text)`` with every failure a :class:`SceneError` naming ``label``
-    (deep nesting, which makes the parser recurse, included)."""
-    from ..model.limits import MAX_NESTING, check_nesting
-
-    try:
-        raw = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError(f"{label}: not valid TOML: {exc}") from exc
-    except (RecursionError, MemoryError):
-        raise SceneError(f"{label}: tables or lists nested too deeply (more than {MAX_NESTING} "
-                         "levels) or too large to parse") from None
-    try:
-        check_nesting(label, raw)
-    except InputError as exc:
-        raise SceneError(str(exc)) from None
-    return raw
 
 
 def refuse_where_it_runs(raw: dict, label: str) -> None:

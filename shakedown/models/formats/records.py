@@ -129,7 +129,7 @@ def _columns(p: Path, header: list[str]) -> tuple[int, np.ndarray, np.ndarray]:
                                  "'p_<node>' (nodes numbered from 1)")
         found[(m.group(1), int(m.group(2)))] = i
     n = max((j for _, j in found), default=0)
-    if 2 * n > len(header) - 1:  # (before listing the missing columns: q_1000000000)
+    if n > len(header):  # (before listing the missing columns: q_1000000000)
         kind, j = max(found, key=lambda kj: kj[1])
         raise ModelFileError(f"{p}: column '{kind}_{j}' names node {j}, but the record has "
                              f"only {len(header) - 1} data columns (q_j and p_j of nodes "
