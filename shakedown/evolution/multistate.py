@@ -38,12 +38,13 @@ from .step_types import FORWARD, SEPARATED, STICK, StepResult, kinematic_states
 
 
 def check_energy_scale(F: float, D: np.ndarray, tol: float) -> float:
-    """The energy scale ``F^2 sum(1/D)`` of a run [force x length]; :class:`InputError` when it
-    or its ``tol`` fraction leaves the normal double range (forces x 1e-150 with stiffness
+    """The energy scale ``F^2 sum(1/D)`` of a run [force x length]; :class:`InputError` when its
+    ``tol`` fraction underflows the normal double range (forces x 1e-150 with stiffness
     x 1e150: every dissipation would underflow to 0 or a subnormal number)."""
     with np.errstate(over="ignore", under="ignore", divide="ignore"):
         energy = float(F) * float(F) * float(np.sum(1.0 / np.asarray(D, float)))
-    if not (np.isfinite(energy) and energy * tol >= np.finfo(float).tiny):
+    if np.isfinite(energy) and not energy * tol >= np.finfo(float).tiny:  # (an overflow is
+        # reported by the run's own checks, as a failed run)
         raise InputError(
             f"the forces (largest welded reaction {F:.3g} [force]) and the stiffness (diagonal "
             f"{float(np.min(D)):.3g}..{float(np.max(D)):.3g} [force/length]) give an energy "

@@ -154,6 +154,8 @@ def _first_non_number(value, depth: int = 0):
         return None
     if isinstance(value, np.ndarray) and value.dtype.kind in "iuf":
         return None
+    if isinstance(value, np.ndarray):
+        value = [value.item()] if value.ndim == 0 else value.ravel()
     if isinstance(value, (list, tuple, np.ndarray)):
         for v in value:
             bad = _first_non_number(v, depth + 1)
