@@ -170,9 +170,9 @@ def refuse_where_it_runs(raw: dict, label: str) -> None:
             if table.get(key) not in (None, module.OPTIONS[key][1]):
                 raise SceneError(
                     f"{label}: [analyses.{name}] {key} = {table[key]!r}: a scene or manifest "
-                    f"file may not set {key!r} (it chooses a host to connect to, trusted like "
-                    f"running its code); remove it and pass --set {key}=... on the command line "
-                    "(or set SHAKEDOWN_SCHEDULER)")
+                    f"file may not name a Dask scheduler or any other host ({key!r} chooses "
+                    "where the work runs, trusted like running its code); remove it and pass "
+                    f"--set {key}=... on the command line (or set SHAKEDOWN_SCHEDULER)")
 
 
 def scene_from_string(text: str, directory: Path | None = None) -> Scene:
