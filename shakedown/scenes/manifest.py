@@ -290,7 +290,7 @@ def scene_from_manifest(path) -> dict:
     """
     from ..model.errors import InputError
     from ..model.limits import MAX_NESTING, check_file_size, check_nesting
-    from .files import read_text
+    from .reading import read_text
 
     path = Path(path)
     try:
