@@ -253,6 +253,12 @@ def _energy(records, load, lam, D, F, tol, K=None, implicit=False):
     du, drw = np.diff(u, axis=0), np.diff(rw, axis=0)
     integral = float(np.sum(0.5 * (u[1:] + u[:-1]) * drw))
     W = float(sum(r.dissipation for r in records))
+    if W != 0.0 and abs(W) < np.finfo(float).tiny:
+        import warnings
+
+        warnings.warn(f"the dissipation per cycle W = {W:.3g} is a subnormal number (below "
+                      f"{np.finfo(float).tiny:.3g}): it has lost precision; express forces and "
+                      "lengths in units nearer to the problem's size", RuntimeWarning, stacklevel=2)
     n = records[0].v.shape[1]
     floor = F * F * float(np.sum(1.0 / D[:n])) * tol
     scale = max(abs(W), abs(integral), floor)

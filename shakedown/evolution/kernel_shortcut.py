@@ -33,10 +33,14 @@ from .kernel_jit import njit
 #: Largest dimension of the increments' space for which the responses are kept (a load of
 #: more harmonics, or a sampled record, runs every step by the general solve).
 MAX_RANK = 8
-#: Relative eigenvalue of the increments' Gram matrix (a squared singular value) below which a
-#: direction is dropped as round-off; the kept basis must then represent every increment to
-#: ``1e-13`` of the largest, else the shortcut is off for the period.
-RANK_RTOL = 1e-14
+#: Relative accuracy of a represented increment (of the largest increment ``dmax``); raised to
+#: the round-off the increments carry themselves (``16 eps max|W|``: at many steps per cycle
+#: the differences of the welded reactions are exact only to that).  A block's direction whose
+#: singular value is below ``2 (sqrt(rows) + sqrt(2N))`` times this is dropped as round-off;
+#: every increment must then be represented to that bound, else the shortcut is off.
+RANK_RTOL = 1e-13
+#: Increments per block of the basis scan (bounds its memory: no ``(S - 1)^2`` Gram matrix).
+BLOCK = 256
 #: Largest equation residual of a response to a unit increment (relative; a sanity check).
 BUILD_RTOL = 1e-8
 #: Consecutive steps an assignment must be kept (at the first active-set iteration) before its
@@ -47,33 +51,97 @@ PERSIST = 2
 VALID, M_FREE, RUN, ENABLED = 0, 1, 2, 3
 
 
+def increment_basis(D: np.ndarray, noise: float = RANK_RTOL, max_rank: int = MAX_RANK,
+                    block: int = BLOCK):
+    """Orthonormal rows spanning the rows of ``D`` (n_incr, m) to ``noise``, in ``O(n_incr m r)``.
+
+    The rows are taken ``block`` at a time: each block is projected (twice, for round-off) off
+    the directions found so far; if an entry of what remains exceeds the drop level
+    ``2 noise (sqrt(rows) + sqrt(m))`` (:func:`drop_level`), its right singular vectors with
+    singular values above that level are added.  Memory is
+    bounded by the block and the basis (never a Gram matrix of all the increments); the scan
+    stops as soon as more than ``max_rank`` directions are found.
+
+    Parameters
+    ----------
+    D : ndarray, shape (n_incr, m)
+        The increments, scaled so that ``|D|.max() == 1`` (dimensionless).
+    noise : float
+        Accuracy of an entry of ``D`` (dimensionless).
+    max_rank : int
+    block : int
+        Rows per block.
+
+    Returns
+    -------
+    ndarray, shape (r, m), or None
+        The basis (``r <= max_rank``), or None when the rows span more than ``max_rank``
+        directions.
+    """
+    m = D.shape[1]
+    return _basis((D[i0:i0 + block] for i0 in range(0, D.shape[0], block)), m, noise, max_rank)
+
+
+def _basis(blocks, m: int, noise: float, max_rank: int):
+    """:func:`increment_basis` of the row blocks ``blocks`` (an iterable of (rows, m) arrays)."""
+    SB = np.zeros((0, m))
+    for R in blocks:
+        for _ in range(2):  # projection repeated: classical Gram-Schmidt twice is orthogonal
+            R = R - (R @ SB.T) @ SB
+        level = drop_level(noise, R.shape[0], m)
+        if not np.abs(R).max(initial=0.0) > level:  # every row represented to the drop level
+            continue  # (the common case: O(rows m r) per block, no decomposition)
+        _, sv, Vt = np.linalg.svd(R, full_matrices=False)
+        new = Vt[sv > level]
+        if SB.shape[0] + new.shape[0] > max_rank:
+            return None
+        if new.shape[0]:
+            SB = np.linalg.qr(np.vstack([SB, new]).T)[0].T  # re-orthonormalised (round-off)
+    return SB
+
+
+def drop_level(noise: float, rows: int, m: int) -> float:
+    """Singular value below which a block's direction is round-off: twice the largest singular
+    value of a ``rows x m`` block of independent errors of size ``noise``."""
+    return 2.0 * noise * (np.sqrt(rows) + np.sqrt(m))
+
+
 def state(n: int, qw: np.ndarray, pw: np.ndarray):
     """The shortcut's arrays for one period of welded reactions ``qw, pw`` (n_steps, n):
     ``(SB, SCc, RESP, T, key, free, coef, meta)``; disabled (``meta[ENABLED] = 0``) when the
-    increments span more than :data:`MAX_RANK` directions."""
-    with np.errstate(over="ignore", invalid="ignore"):
-        D = np.hstack([np.diff(qw, axis=0), np.diff(pw, axis=0)])  # (n_steps - 1, 2n)
-        dmax = float(np.abs(D).max(initial=0.0))
+    increments span more than :data:`MAX_RANK` directions.  Cost and memory linear in
+    ``n_steps`` (:func:`increment_basis`)."""
+    steps = qw.shape[0]
+
+    def blocks(scale=1.0):  # the increments W[j] - W[j - 1], BLOCK rows at a time (no copy
+        for i0 in range(0, steps - 1, BLOCK):  # of the whole period)
+            i1 = min(i0 + BLOCK, steps - 1)
+            with np.errstate(over="ignore", invalid="ignore"):
+                yield i0, np.hstack([qw[i0 + 1:i1 + 1] - qw[i0:i1],
+                                     pw[i0 + 1:i1 + 1] - pw[i0:i1]]) / scale
+
+    dmax = max((float(np.abs(D).max()) for _, D in blocks()), default=0.0)
     r, SB = 0, np.zeros((0, 2 * n))
     enabled = 1 if np.isfinite(dmax) else 0  # (an overflowing load: the general path reports)
     if enabled and dmax > 0:
-        Ds = D / dmax  # (the Gram matrix of D itself could overflow)
-        Gm = Ds @ Ds.T
-        w, V = np.linalg.eigh(0.5 * (Gm + Gm.T))
-        keep = w > RANK_RTOL * w[-1]
-        r = int(keep.sum())
-        if r > MAX_RANK:
-            enabled, r = 0, 0
+        wmax = max(np.abs(qw).max(initial=0.0), np.abs(pw).max(initial=0.0))
+        noise = min(max(RANK_RTOL, 16 * np.finfo(float).eps * wmax / dmax), 1e-6)
+        level = drop_level(noise, min(BLOCK, steps - 1), 2 * n)
+        # (scaled by dmax: D itself could overflow in products)
+        B = _basis((D for _, D in blocks(dmax)), 2 * n, noise, MAX_RANK)
+        if B is None:
+            enabled = 0
         else:
-            B = (V[:, keep].T @ Ds) / np.sqrt(w[keep])[:, None]  # orthonormal rows
-            SB = np.linalg.qr(B.T)[0].T  # re-orthonormalised (round-off)
-            r = SB.shape[0]
-    SCc = np.zeros((qw.shape[0], r))
-    if r:
+            SB, r = B, B.shape[0]
+    SCc = np.zeros((steps, r))
+    if enabled and dmax > 0:
+        err = 0.0
         with np.errstate(over="ignore", invalid="ignore"):
-            SCc[1:] = D @ SB.T  # row j: coefficients of W[j] - W[j - 1]
-            err = np.abs(D - SCc[1:] @ SB).max()
-        if not err <= 1e-13 * dmax:  # a small but real direction dropped, or an overflow
+            for i0, D in blocks():
+                C = SCc[i0 + 1:i0 + 1 + D.shape[0]]
+                C[:] = D @ SB.T  # row j: coefficients of W[j] - W[j - 1]
+                err = max(err, float(np.abs(D - C @ SB).max()))
+        if not err <= level * dmax:  # a real direction dropped, or an overflow
             enabled = 0
     meta = np.zeros(4, np.int64)
     meta[ENABLED] = enabled

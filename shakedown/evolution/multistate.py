@@ -29,11 +29,29 @@ import time
 
 import numpy as np
 
+from ..model.errors import InputError
 from . import fast_period
 from .cycle_results import _finish
 from .events import CycleRecord, EventIntegrator
 from .sampling import trust
 from .step_types import FORWARD, SEPARATED, STICK, StepResult, kinematic_states
+
+
+def check_energy_scale(F: float, D: np.ndarray, tol: float) -> float:
+    """The energy scale ``F^2 sum(1/D)`` of a run [force x length]; :class:`InputError` when its
+    ``tol`` fraction underflows the normal double range (forces x 1e-150 with stiffness
+    x 1e150: every dissipation would underflow to 0 or a subnormal number)."""
+    with np.errstate(over="ignore", under="ignore", divide="ignore"):
+        energy = float(F) * float(F) * float(np.sum(1.0 / np.asarray(D, float)))
+    if np.isfinite(energy) and not energy * tol >= np.finfo(float).tiny:  # (an overflow is
+        # reported by the run's own checks, as a failed run)
+        raise InputError(
+            f"the forces (largest welded reaction {F:.3g} [force]) and the stiffness (diagonal "
+            f"{float(np.min(D)):.3g}..{float(np.max(D)):.3g} [force/length]) give an energy "
+            f"scale F^2/k = {energy:.3g} [force x length] outside the range of double precision "
+            f"(its tol = {tol:g} fraction must be above {np.finfo(float).tiny:.3g}): express "
+            "forces and lengths in units nearer to the problem's size")
+    return energy
 
 
 def _state_change(D, F, v1, w1, v0, w0):
@@ -292,6 +310,7 @@ def run_states(system, solver, load, lam, V0, W0, method, n_steps, max_cycles, t
     F = float(max(np.abs(qg).max(), np.abs(pg).max()))
     F = F if F > 0 else 1.0
     D = solver.diag
+    check_energy_scale(F, D, tol)
     dtol = solver.feas_tol * F / D
     tracks = [_Track(v0, w0) for v0, w0 in zip(V0, W0, strict=True)]
     integrator = None

@@ -31,7 +31,7 @@ import numpy as np
 
 from ..model.errors import InputError
 from ..model.results import short_repr
-from ..model.validation import check_count
+from ..model.validation import check_count, check_positive
 from .steady_maps import (
     FD_STEP,
     _anderson,
@@ -176,6 +176,7 @@ def steady_cycle(system, load, lam: float, initial_slip=None, *, method: str = "
     if accelerator not in ("auto", "newton", "anderson"):
         raise InputError(f"accelerator must be 'auto', 'newton' or 'anderson'; got {accelerator!r}")
     check_count("max_evaluations", max_evaluations, 4)
+    fd_step = check_positive("fd_step", fd_step, unit=" (in slip scales, e.g. 1e-4)")
     if not (np.isfinite(tol) and tol > 0):
         raise InputError(f"tol must be a positive number; got {tol}")
     acc = accelerator if accelerator != "auto" else ("newton" if n <= 12 else "anderson")

@@ -266,8 +266,10 @@ def uniqueness_study(system, load, lam: float, initial_slips=16, *, rng=None,
             raise InputError("initial_slips must be finite")
     if n_jobs is None:
         n_jobs = os.cpu_count() or 1
-    if int(n_jobs) < 1:
-        raise InputError(f"n_jobs must be >= 1 (or None for all cores); got {n_jobs}")
+    if (not isinstance(n_jobs, (int, np.integer)) or isinstance(n_jobs, (bool, np.bool_))
+            or int(n_jobs) < 1):
+        raise InputError(f"n_jobs must be an integer >= 1 (or None for all cores); got "
+                         f"{type(n_jobs).__name__} {n_jobs!r}")
     n_jobs = min(int(n_jobs), len(states))
     kw = dict(method=method, steps_per_cycle=steps_per_cycle, tol=tol)
     if solver == "steady":

@@ -40,6 +40,15 @@ class UnsafePathError(InputError):
     """A name or path would write outside the output folder or through a symbolic link."""
 
 
+class OutputError(ShakedownError, OSError):
+    """A result file could not be written (read-only or full disk); the message names the file."""
+
+
+class DamagedFileError(InputError):
+    """A file the package wrote earlier (a store part, a cache) fails its own check and cannot
+    be repaired; the message names the file and what to do."""
+
+
 class SolverError(ShakedownError, RuntimeError):
     """A numerical solver failed unexpectedly; ``partial`` holds whatever was computed."""
 

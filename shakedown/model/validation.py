@@ -45,8 +45,15 @@ def check_load_factor(lam, load=None) -> float:
     their bound ``max|r_0| + lam * max|r_1|`` must be finite (else the solvers would compute
     with inf and NaN).
     """
+    if isinstance(lam, (bool, np.bool_, str, bytes)) or (
+            isinstance(lam, np.ndarray) and lam.dtype.kind not in "iuf"):
+        raise InputError(f"lam must be a number >= 0; got {type(lam).__name__} {lam!r} "
+                         "(write it as a plain number, e.g. lam=0.5)")
     try:
         lam = float(lam)
+    except OverflowError:
+        raise InputError(f"lam must be a finite number >= 0; got an integer too large for a "
+                         f"float ({str(lam)[:20]}...)") from None
     except (TypeError, ValueError) as exc:
         raise InputError(f"lam must be a number >= 0; got {lam!r}") from exc
     if not np.isfinite(lam) or lam < 0:
@@ -67,9 +74,12 @@ def check_load_factor(lam, load=None) -> float:
 
 def check_positive(name: str, value, *, unit: str = "") -> float:
     """``value`` as a finite float ``> 0`` (a length, a modulus, a density)."""
+    if isinstance(value, (bool, np.bool_, str, bytes)):
+        raise InputError(f"{name} must be a finite number > 0{unit}; got "
+                         f"{type(value).__name__} {value!r}")
     try:
         x = float(value)
-    except (TypeError, ValueError) as exc:
+    except (TypeError, ValueError, OverflowError) as exc:
         raise InputError(f"{name} must be a finite number > 0{unit}; got {value!r}") from exc
     if not (np.isfinite(x) and x > 0):
         raise InputError(f"{name} must be a finite number > 0{unit}; got {x}")
@@ -85,7 +95,7 @@ def check_count(name: str, value, minimum: int, maximum: int = MAX_COUNT) -> int
     """``value`` as an integer in ``[minimum, maximum]``; bools, NaN, fractions, text refused."""
     ok = isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
     if not ok and isinstance(value, (float, np.floating)) and np.isfinite(value):
-        ok = float(value).is_integer()
+        ok = float(value).is_integer() and abs(value) < 2.0**63
     if not ok or int(value) < minimum:
         raise InputError(f"{name} must be an integer >= {minimum}; got {value!r}")
     if int(value) > maximum:
@@ -132,10 +142,49 @@ def real_array(name: str, value, *, what: str = "a real array", copy: bool = Tru
             f"{name} must be {what}; got complex values (pass the real part explicitly, "
             "e.g. np.real(...), if the imaginary part is round-off)"
         )
+    kind = _peek(value).dtype.kind if not isinstance(value, np.ndarray) else value.dtype.kind
+    if kind in "bUSO" or isinstance(value, (str, bytes)):
+        # True -> 1.0 and "0.5" -> 0.5 would convert silently; objects may be huge integers
+        bad = _first_non_number(value)
+        if bad is not None or kind in "bUS" or isinstance(value, (str, bytes)):
+            shown = bad if bad is not None else value
+            raise InputError(
+                f"{name} must be {what} of numbers; got {type(shown).__name__} {_short(shown)} "
+                "(booleans and text are not numbers: write the values as plain numbers)")
     try:
         return np.array(value, dtype=float) if copy else np.asarray(value, dtype=float)
+    except OverflowError:
+        raise InputError(f"{name} must be {what}; it holds an integer too large for a float "
+                         "(more than 1.8e308): express it in larger units") from None
     except (TypeError, ValueError) as exc:
         raise InputError(f"{name} must be {what}; got {type(value).__name__}") from exc
+
+
+def _short(value) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _first_non_number(value, depth: int = 0):
+    """The first entry of nested lists/arrays that is not a real number (bools and text are
+    not), or None."""
+    if depth > 64:
+        return value
+    if isinstance(value, (bool, np.bool_, str, bytes)):
+        return value
+    if isinstance(value, (int, float, np.integer, np.floating)):
+        return None
+    if isinstance(value, np.ndarray) and value.dtype.kind in "iuf":
+        return None
+    if isinstance(value, np.ndarray):
+        value = [value.item()] if value.ndim == 0 else value.ravel()
+    if isinstance(value, (list, tuple, np.ndarray)):
+        for v in value:
+            bad = _first_non_number(v, depth + 1)
+            if bad is not None:
+                return bad
+        return None
+    return value
 
 
 def _peek(value):

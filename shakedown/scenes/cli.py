@@ -29,7 +29,7 @@ import sys
 import time
 from pathlib import Path
 
-from ..model.errors import InputError, SceneError, ShakedownError
+from ..model.errors import InputError, OutputError, SceneError, ShakedownError
 
 ANALYSIS_COMMANDS = ("bounds", "cycles", "sweep", "stability", "fretting")
 
@@ -111,14 +111,21 @@ def main(argv=None) -> int:
     args = _parser().parse_args(argv)
     try:
         return _main(args, sys.argv[1:] if argv is None else argv)
+    except OutputError as exc:  # the disk refused a result file: nothing half-written
+        print(f"shakedown: error: {exc}", file=sys.stderr)
+        return 74  # EX_IOERR
     except (SceneError, InputError, ShakedownError) as exc:
         print(f"shakedown: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("shakedown: interrupted", file=sys.stderr)
         return 130
-    except BrokenPipeError:  # `shakedown run | head`: the reader stopped early
-        sys.stdout = open(os.devnull, "w")  # noqa: SIM115 -- silence the exit-time flush
+    except BrokenPipeError:  # `shakedown run | head`: the reader stopped early, after every
+        # result file was written (they are written before anything is printed): success
+        try:
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        except (OSError, AttributeError, ValueError):  # (a stdout without a file descriptor)
+            sys.stdout = open(os.devnull, "w")  # noqa: SIM115 -- silence the exit-time flush
         return 0
 
 
@@ -148,20 +155,30 @@ def _main(args, argv=()) -> int:
     run_names = (list(scene.analyses) or ["bounds"]) if args.command == "run" else [args.command]
     if args.set:
         scene = _apply_overrides(scene, run_names, args.set)
-    out = OutputFolder(args.out or Path("shakedown-out") / scene.name)
+    # results are staged inside the folder and moved into place only once the run has
+    # succeeded (with its provenance): a failed or refused run leaves the folder as it was
+    out = OutputFolder(args.out or Path("shakedown-out") / scene.name, staged=True)
     progress = Progress(enabled=not args.quiet)
-    record = RunRecord.start(scene, out, resolved_analyses(scene, run_names),  # provenance
-                             builder_module(scene.model["kind"]), argv)
     t0 = time.perf_counter()
     # whatever an analysis prints while it runs is a detail: shown after all verdicts
     printed = io.StringIO()
     try:
+        record = RunRecord.start(scene, out, resolved_analyses(scene, run_names),  # provenance
+                                 builder_module(scene.model["kind"]), argv)
         with contextlib.redirect_stdout(printed):
             summaries = run_scene(scene, out, progress, only=run_names)
+        elapsed = time.perf_counter() - t0
+        meta = {"scene": scene.label, "analyses": summaries, "elapsed_s": elapsed,
+                "node_numbering": "from 1", "cite": record.cite()}
+        out.write_json("summary.json", meta)
+        record.finish()
+        out.commit()
     except BaseException:
-        sys.stdout.write(printed.getvalue())
+        out.discard()
+        with contextlib.suppress(OSError, ValueError):
+            sys.stdout.write(printed.getvalue())
         raise
-    elapsed = time.perf_counter() - t0
+    # every file is in place before anything is printed: a closed stdout costs no file
     for name, summary in summaries.items():
         print(f"{name}: {summary.get('verdict', '(no verdict)')}")
     print(f"\nscene: {scene.label} ({scene.model['kind']}): {scene.description}".rstrip(": "))
@@ -172,12 +189,9 @@ def _main(args, argv=()) -> int:
                 print(f"  {key}: {format_value(value)}")
     if printed.getvalue().strip():
         print("\n" + printed.getvalue().rstrip())
-    meta = {"scene": scene.label, "analyses": summaries, "elapsed_s": elapsed,
-            "node_numbering": "from 1", "cite": record.cite()}
-    out.write_json("summary.json", meta)
-    record.finish()
     print(f"\n{record.cite()} (BibTeX: CITATIONS.bib)")
     print(f"\nresults written to {out.path}/ ({len(set(out.written))} files, {elapsed:.1f} s)")
+    sys.stdout.flush()
     return 0
 
 if __name__ == "__main__":  # pragma: no cover

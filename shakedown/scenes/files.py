@@ -25,17 +25,12 @@ from __future__ import annotations
 import contextlib
 import importlib
 import importlib.resources
-import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..model.errors import InputError, SceneError
 from .output import check_plain_name
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
+from .reading import parse_toml, read_text, tomllib  # noqa: F401 (tomllib: re-exported)
 
 #: Model kinds and the module that builds each.
 MODEL_KINDS = {
@@ -144,25 +139,47 @@ def resolve_scene_path(scene: str | Path | None) -> Path:
 
 
 def load_scene(scene: str | Path | None = None) -> Scene:
-    """Read and validate a scene file (or a built-in scene by name)."""
+    """Read and validate a scene file (or a built-in scene by name, or a run's manifest.json).
+
+    The file is checked before it is parsed (size at most
+    :data:`~shakedown.model.limits.MAX_SCENE_BYTES`, UTF-8 text) and after (nesting at most
+    :data:`~shakedown.model.limits.MAX_NESTING` levels); a manifest goes through the same
+    refusals as a scene file (no Dask scheduler or other "where it runs" option from a file).
+    """
     path = resolve_scene_path(scene)
     if path.suffix == ".json":  # a run's manifest.json: its resolved scene (scenes/manifest.py)
         from .manifest import scene_from_manifest
 
-        return scene_from_dict(scene_from_manifest(path), path=path)
-    try:
-        raw = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError(f"{path}: not valid TOML: {exc}") from exc
+        raw = scene_from_manifest(path)
+    else:
+        raw = parse_toml(read_text(path, "scene file"), str(path))
+    refuse_where_it_runs(raw, str(path))
     return scene_from_dict(raw, path=path)
+
+
+def refuse_where_it_runs(raw: dict, label: str) -> None:
+    """:class:`SceneError` if a file's ``[analyses.*]`` tables set an option that chooses where
+    the work runs (``WHERE_IT_RUNS``, e.g. the sweep's Dask ``scheduler``): connecting to a
+    host is trusted like running its code, so it comes from the command line only."""
+    analyses = raw.get("analyses") if isinstance(raw, dict) else None
+    if not isinstance(analyses, dict):
+        return
+    for name, table in analyses.items():
+        if name not in ANALYSES or not isinstance(table, dict):
+            continue
+        module = analysis_module(name, label)
+        for key in getattr(module, "WHERE_IT_RUNS", ()):
+            if table.get(key) not in (None, module.OPTIONS[key][1]):
+                raise SceneError(
+                    f"{label}: [analyses.{name}] {key} = {table[key]!r}: a scene or manifest "
+                    f"file may not name a Dask scheduler or any other host ({key!r} chooses "
+                    "where the work runs, trusted like running its code); remove it and pass "
+                    f"--set {key}=... on the command line (or set SHAKEDOWN_SCHEDULER)")
 
 
 def scene_from_string(text: str, directory: Path | None = None) -> Scene:
     """Parse a scene from TOML text (files it names are looked up in ``directory``)."""
-    try:
-        raw = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError(f"<string>: not valid TOML: {exc}") from exc
+    raw = parse_toml(text, "<string>")
     path = (Path(directory) / "<string>.toml") if directory is not None else None
     return scene_from_dict(raw, path=path)
 

@@ -147,8 +147,11 @@ def resolved_scene(scene, analyses: dict, builder=None) -> dict:
         model, load = builder.resolved(model, load)
     model = {"kind": scene.model["kind"], **_absolute_files(model, scene.directory)}
     load = _absolute_files(load, scene.directory)
-    return {"scene": {"name": scene.name, "description": scene.description},
-            "model": model, "load": load, "analyses": {k: dict(v) for k, v in analyses.items()}}
+    meta = {"name": scene.name, "description": scene.description}
+    raw_meta = (scene.raw or {}).get("scene", {})
+    meta.update({k: raw_meta[k] for k in ("force_unit", "length_unit") if k in raw_meta})
+    return {"scene": meta, "model": model, "load": load,
+            "analyses": {k: dict(v) for k, v in analyses.items()}}
 
 
 def _seeds(tables: dict, prefix: str = "") -> dict:
@@ -214,10 +217,6 @@ class RunRecord:
         self.output = output
         self.tables = resolved_scene(scene, analyses, builder)
         self.started = _now()
-        inputs = {}
-        for name in _files(self.tables["model"]) + _files(self.tables["load"]):
-            if Path(name).is_file():
-                inputs[name] = sha256(name)
         source = scene.path if scene.path is not None and scene.path.is_file() else None
         self.data = {
             "shakedown_version": __version__,
@@ -231,7 +230,7 @@ class RunRecord:
             "seeds": _seeds({k: self.tables[k] for k in ("model", "load", "analyses")}),
             "input_notes": (builder.provenance(self.tables["model"], self.tables["load"])
                             if hasattr(builder, "provenance") else {}),
-            "input_files": inputs,
+            "input_files": {},
             "dependencies": dependency_versions(),
             "machine": machine(),
             "start_utc": self.started,
@@ -239,31 +238,42 @@ class RunRecord:
 
     @classmethod
     def start(cls, scene, output, analyses: dict, builder=None, argv=None) -> RunRecord:
-        """Begin a run: reset the citations, write ``scene.resolved.toml``.
+        """Begin a run: reset the citations.  Nothing is written until :meth:`finish`.
 
         ``analyses`` and ``builder`` as in :func:`resolved_scene`; ``argv`` the command's
         arguments (default ``sys.argv[1:]``).
         """
         citations.reset()
-        record = cls(scene, output, analyses, builder, argv)
-        output.file("scene.resolved.toml").write_text(
-            f"# resolved by shakedown {record.data['shakedown_version']}: "
-            "every default filled in; `shakedown run` this file to run it again\n"
-            + to_toml(record.tables))
-        return record
+        return cls(scene, output, analyses, builder, argv)
 
     def cite(self) -> str:
         """What to cite for the methods used so far."""
         return citations.summary()
 
     def finish(self) -> dict:
-        """Write ``CITATIONS.bib`` and ``manifest.json``; returns the manifest."""
-        self.output.file("CITATIONS.bib").write_text(citations.bibtex())
-        written = sorted({p for p in self.output.written if p.is_file()})
+        """Write ``scene.resolved.toml``, ``CITATIONS.bib`` and ``manifest.json`` (once the run
+        has succeeded: a failed run leaves no provenance); returns the manifest.
+
+        The input files are hashed here, after the builder has read (and size-checked) them.
+        """
+        inputs = {}
+        for name in _files(self.tables["model"]) + _files(self.tables["load"]):
+            if Path(name).is_file():
+                inputs[name] = sha256(name)
+        self.output.write_text(
+            "scene.resolved.toml",
+            f"# resolved by shakedown {self.data['shakedown_version']}: "
+            "every default filled in; `shakedown run` this file to run it again\n"
+            + to_toml(self.tables))
+        self.output.write_text("CITATIONS.bib", citations.bibtex())
+        written = sorted({p for p in self.output.written if p.name != "manifest.json"})
+        final = getattr(self.output, "final", lambda name: self.output.path / name)
         self.data.update(
+            input_files=inputs,
             end_utc=_now(),
             citations=list(citations.used()),
-            output_files={p.name: sha256(p) for p in written if p.name != "manifest.json"},
+            output_files={p.name: sha256(final(p.name)) for p in written
+                          if final(p.name).is_file()},
         )
         self.output.write_json("manifest.json", self.data)
         return self.data
@@ -278,17 +288,35 @@ def scene_from_manifest(path) -> dict:
     SceneError
         If the file is not a manifest, or an input file is missing or changed since the run.
     """
+    from ..model.errors import InputError
+    from ..model.limits import MAX_NESTING, check_file_size, check_nesting
+    from .reading import read_text
+
     path = Path(path)
     try:
-        data = json.loads(path.read_text())
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        data = json.loads(read_text(path, "manifest"))
+        check_nesting(path, data)
+    except json.JSONDecodeError as exc:
         raise SceneError(f"{path}: not a readable manifest (JSON): {exc}") from None
+    except (RecursionError, MemoryError):
+        raise SceneError(f"{path}: the manifest nests tables or lists too deeply (more than "
+                         f"{MAX_NESTING} levels) or is too large to parse") from None
+    except InputError as exc:
+        raise SceneError(str(exc)) from None
     if not isinstance(data, dict) or not isinstance(data.get("resolved_scene"), dict):
         raise SceneError(f"{path}: not a shakedown manifest (no 'resolved_scene' table); give the "
                          "manifest.json of an output folder or a scene file (.toml)")
-    for name, digest in (data.get("input_files") or {}).items():
+    inputs = data.get("input_files") or {}
+    if not isinstance(inputs, dict) or not all(
+            isinstance(k, str) and isinstance(v, str) for k, v in inputs.items()):
+        raise SceneError(f"{path}: 'input_files' must map file names to SHA-256 texts")
+    for name, digest in inputs.items():
         if not Path(name).is_file():
             raise SceneError(f"{path}: input file {name} of the recorded run is missing")
+        try:
+            check_file_size(name, "input file")  # before hashing it
+        except InputError as exc:
+            raise SceneError(f"{path}: {exc}") from None
         if sha256(name) != digest:
             raise SceneError(f"{path}: input file {name} has changed since the recorded run "
                              "(SHA-256 differs), so the run cannot be reproduced; run "

@@ -35,13 +35,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..model.errors import InputError
+from ..model.errors import DamagedFileError, InputError
 from ..model.results import VerdictText, short_repr
 from . import summary as _summary
 from .design import initial_states, lam_points, refine_points, state_kind
 from .engine import Task, run_tasks
 from .runs import run_row
-from .safe_files import refuse_link, write_atomic
+from .safe_files import make_folder, refuse_link, write_atomic
 from .spec import _SAMPLER_FIELDS, SweepSpec
 from .tables import KEY, open_store
 from .workers import Workers
@@ -274,8 +274,7 @@ def run_sweep(spec: SweepSpec, store, *, n_workers: int | None = None, scheduler
     if not isinstance(spec, SweepSpec):
         raise InputError(f"spec must be a SweepSpec; got {type(spec).__name__}")
     t0 = time.perf_counter()
-    store = refuse_link(store, "store")
-    store.mkdir(parents=True, exist_ok=True)
+    store = make_folder(store, "store")
     _check_spec_file(store / "spec.json", spec)
     n_workers = int(n_workers or os.cpu_count() or 1)
     sub = (lambda name: store / f"{name}.csv") if format == "csv" else (lambda name: store / name)
@@ -311,7 +310,15 @@ def run_sweep(spec: SweepSpec, store, *, n_workers: int | None = None, scheduler
 def _check_spec_file(path: Path, spec: SweepSpec) -> None:
     new = spec.to_dict()
     if refuse_link(path, "store file").exists():
-        old = json.loads(path.read_text())
+        try:
+            old = json.loads(path.read_bytes().decode("utf-8"))
+            if not isinstance(old, dict):
+                raise ValueError(f"a JSON {type(old).__name__}, not an object")
+        except (ValueError, RecursionError, OSError) as exc:
+            raise DamagedFileError(
+                f"store file {path} is not a readable spec ({type(exc).__name__}: {exc}); the "
+                "store's spec cannot be checked: use another store folder, or remove the store "
+                "(--set fresh=true) to start over") from None
         diff = {k: (old.get(k), v) for k, v in new.items() if old.get(k) != v}
         if diff:
             k, (o, n) = next(iter(diff.items()))

@@ -16,6 +16,23 @@ _MODEL_FIELDS = ("n_cracks", *_SAMPLER_FIELDS, "seed", "shear_modulus", "poisson
                  "friction", "interaction_radius")
 
 
+def _numbers(name: str, value) -> list[float]:
+    """The entries of a list option as floats; :class:`InputError` naming ``name`` for text,
+    booleans or nested objects (``[true, 1.0]`` would read as ``[1.0, 1.0]``)."""
+    items = list(value) if isinstance(value, (list, tuple, np.ndarray)) else [value]
+    out = []
+    for x in items:
+        if isinstance(x, (bool, np.bool_, str, bytes)) or not isinstance(
+                x, (int, float, np.integer, np.floating)):
+            raise InputError(f"{name!r} must be a list of numbers; got {type(x).__name__} "
+                             f"{x!r} in {name} = {value!r}")
+        try:
+            out.append(float(x))
+        except OverflowError:
+            raise InputError(f"{name!r} holds an integer too large for a float") from None
+    return out
+
+
 @dataclass(frozen=True, eq=False)
 class SystemSource:
     """One given system and load to sweep (any model: matrices, files, FE, half-plane, a crack
@@ -180,17 +197,13 @@ class SweepSpec:
                 raise InputError(f"{name} must be 3 finite stresses (sxx, sxy, syy); got {v}")
             setv(name, v)
         if not isinstance(self.lams, str):
-            try:
-                lams = tuple(float(x) for x in np.ravel(self.lams))
-            except (TypeError, ValueError):
-                raise InputError(f"lams must be 'auto' or a list of load factors >= 0; got "
-                                 f"{self.lams!r}") from None
+            lams = tuple(_numbers("lams", self.lams))
             if not lams or not all(np.isfinite(x) and x >= 0 for x in lams):
                 raise InputError(f"lams must be 'auto' or a list of load factors >= 0; got {lams}")
             setv("lams", lams)
         elif self.lams != "auto":
             raise InputError(f"lams must be 'auto' or a list of numbers; got {self.lams!r}")
-        span = tuple(float(x) for x in np.ravel(self.lam_span))
+        span = tuple(_numbers("lam_span", self.lam_span))
         if len(span) != 2 or not 0 <= span[0] < span[1] or not np.isfinite(span[1]):
             raise InputError(f"lam_span must be (low, high) with 0 <= low < high; got {span}")
         setv("lam_span", span)

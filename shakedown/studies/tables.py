@@ -17,6 +17,14 @@ link is refused instead of written through.
   converter, so they come back bit for bit.  A torn last line (a file written by an older
   version, killed mid-append) is ignored by readers and cut by the next writer.
 
+Every part / row block carries its own check (:mod:`.store_checks`): its row count, a
+SHA-256 of its content and its task keys.  Opening a store (taking its lock) verifies it and
+repairs what it can, saying so by a ``RuntimeWarning`` naming the file: a damaged part (cut,
+edited, a column renamed, unreadable) is moved to ``damaged/`` and a damaged CSV block is cut
+out, so that their tasks run again; a part that repeats rows of an earlier part (a copy) is
+moved aside too.  What cannot be repaired (an unreadable CSV file without checks) is refused
+with :class:`~shakedown.model.errors.DamagedFileError` naming the file.
+
 Both take an exclusive lock (:mod:`filelock`, an OS lock released when its process dies, so a
 killed writer's lock never blocks the next run) so that two processes never write one store.
 """
@@ -33,7 +41,8 @@ from pathlib import Path
 import pandas as pd
 
 from ..model.errors import InputError
-from .safe_files import refuse_link, write_atomic
+from . import store_checks as _checks
+from .safe_files import make_folder, refuse_link, write_atomic
 
 __all__ = ["KEY", "ParquetStore", "CsvStore", "open_store"]
 
@@ -103,10 +112,15 @@ class ParquetStore(_Store):
 
     def __init__(self, path):
         super().__init__(path)
-        self.path.mkdir(parents=True, exist_ok=True)
+        make_folder(self.path, "store")
+        self.repairs: list[str] = []
 
     def _folder(self) -> Path:
         return self.path
+
+    def _repair(self) -> None:
+        super()._repair()
+        self.repairs = _checks.repair_parquet(self.parts(), self.path)
 
     def _lock_path(self) -> Path:
         return self.path / ".lock"
@@ -120,17 +134,16 @@ class ParquetStore(_Store):
             return
         self._check_rows(rows)
         n = len(self.parts())
-        buf = io.BytesIO()
-        pd.DataFrame(rows).to_parquet(buf, index=False)
-        write_atomic(self.path / f"part-{n:06d}-{uuid.uuid4().hex[:8]}.parquet",
-                     buf.getvalue(), "store part")
+        data = _checks.parquet_bytes(pd.DataFrame(rows))
+        write_atomic(self.path / f"part-{n:06d}-{uuid.uuid4().hex[:8]}.parquet", data,
+                     "store part")
 
     def read(self) -> pd.DataFrame:
         """Every row, parts in the order they were written."""
         parts = self.parts()
         if not parts:
             return pd.DataFrame(columns=[KEY])
-        return pd.concat([pd.read_parquet(refuse_link(p, "store part")) for p in parts],
+        return pd.concat([_checks.read_part(refuse_link(p, "store part")) for p in parts],
                          ignore_index=True)
 
 
@@ -141,7 +154,8 @@ class CsvStore(_Store):
 
     def __init__(self, path):
         super().__init__(path)
-        self.path.parent.mkdir(parents=True, exist_ok=True)
+        make_folder(self.path.parent, "store folder")
+        self.repairs: list[str] = []
 
     def _folder(self) -> Path:
         return self.path.parent
@@ -153,7 +167,11 @@ class CsvStore(_Store):
         super()._repair()
         data = self._bytes()
         if data and not data.endswith(b"\n"):
-            write_atomic(self.path, data[: data.rfind(b"\n") + 1], "store")
+            data = data[: data.rfind(b"\n") + 1]
+            write_atomic(self.path, data, "store")
+        good, self.repairs = _checks.repair_csv(data, self.path)
+        if good != data:
+            write_atomic(self.path, good, "store")
 
     def _bytes(self) -> bytes:
         refuse_link(self.path, "store")
@@ -173,17 +191,16 @@ class CsvStore(_Store):
         data = self._bytes()
         data = data[: data.rfind(b"\n") + 1]
         header = self._header(data)
-        columns = header or list(dict.fromkeys(k for r in rows for k in r))
+        columns = ([c for c in header if c not in _checks.CSV_CHECK] if header else
+                   list(dict.fromkeys(k for r in rows for k in r)))
         extra = sorted({k for r in rows for k in r} - set(columns))
         if extra:
             raise InputError(
                 f"rows have columns {extra} that the CSV store {self.path} does not have "
                 f"({columns}); every task must return the same columns"
             )
-        buf = io.StringIO()
-        pd.DataFrame(rows, columns=columns).to_csv(
-            buf, index=False, header=header is None, float_format="%.17g", lineterminator="\n")
-        write_atomic(self.path, data + buf.getvalue().encode(), "store")
+        write_atomic(self.path, data + _checks.csv_block(rows, columns, header is None),
+                     "store")
 
     def read(self) -> pd.DataFrame:
         data = self._bytes()
@@ -192,8 +209,12 @@ class CsvStore(_Store):
             return pd.DataFrame(columns=[KEY])
         # pandas >= 3 parses floats exactly by default (and deprecates float_precision)
         exact = {} if int(pd.__version__.split(".")[0]) >= 3 else {"float_precision": "round_trip"}
-        return pd.read_csv(io.BytesIO(data), keep_default_na=False, na_values=[""],
-                           dtype={KEY: str}, **exact)
+        try:
+            df = pd.read_csv(io.BytesIO(data), keep_default_na=False, na_values=[""],
+                             dtype={KEY: str}, **exact)
+        except (ValueError, UnicodeDecodeError, csv.Error) as exc:  # pandas' ParserError too
+            raise _checks.damaged(self.path, f"not a readable CSV table ({exc})") from None
+        return df.drop(columns=[c for c in _checks.CSV_CHECK if c in df.columns])
 
 
 def open_store(path, format: str | None = None) -> _Store:

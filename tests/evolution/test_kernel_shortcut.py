@@ -39,10 +39,15 @@ def test_increment_basis_and_its_representation():
     rec = kernel_shortcut.state(n, rng.standard_normal((steps, n)),
                                 rng.standard_normal((steps, n)))
     assert rec[-1][kernel_shortcut.ENABLED] == 0
-    # a small but real direction (1e-9 of the largest) is below the rank threshold: it would be
-    # dropped, so the representation check turns the shortcut off instead
-    tiny = kernel_shortcut.state(n, qw + 1e-9 * np.cos(3 * t) * d, pw)
-    assert tiny[-1][kernel_shortcut.ENABLED] == 0
+    # a small but real direction (1e-9 of the largest) is kept as a third direction
+    small = kernel_shortcut.state(n, qw + 1e-9 * np.cos(3 * t) * d, pw)
+    assert small[0].shape[0] == 3 and small[-1][kernel_shortcut.ENABLED] == 1
+    # round-off (1e-14 of the largest increment) is dropped and the shortcut stays on; every
+    # increment is represented to the drop level (2 noise (sqrt(rows) + sqrt(2N)) of the largest)
+    noise = kernel_shortcut.state(n, qw + 1e-14 * np.cos(3 * t) * d, pw)
+    assert noise[0].shape[0] == 2 and noise[-1][kernel_shortcut.ENABLED] == 1
+    level = kernel_shortcut.drop_level(kernel_shortcut.RANK_RTOL, steps - 1, 2 * n)
+    np.testing.assert_allclose(noise[1][1:] @ noise[0], D, rtol=0, atol=level * np.abs(D).max())
     # extremes: forces near overflow keep their basis; increments that overflow turn it off,
     # silently (the general path reports the overflow)
     with warnings.catch_warnings():
@@ -52,6 +57,28 @@ def test_increment_basis_and_its_representation():
         alt = 1.5e308 * (-1.0) ** np.arange(steps)[:, None] * np.ones((1, n))
         over = kernel_shortcut.state(n, alt, pw)  # differences 3e308: inf
         assert over[-1][kernel_shortcut.ENABLED] == 0
+
+
+def test_increment_basis_is_linear_in_the_steps_per_cycle():
+    # issue 24: the basis was an eigendecomposition of the (S - 1)^2 Gram matrix of the period's
+    # increments (10^6 steps: 7 TiB; 4000 steps: 13 s).  Now it is scanned in blocks: 65 536
+    # steps of one node and of 8 nodes give the basis of the load's two directions, representing
+    # every increment to the drop level (at this many steps the increments' own round-off,
+    # 16 eps max|W|, dominates)
+    n_steps = 65536
+    t = np.arange(n_steps)[:, None] / n_steps * 2 * np.pi
+    for n in (1, 8):
+        qw = 0.3 + np.cos(t) * np.linspace(1, 2, n)
+        pw = 1.0 + np.sin(t) * np.ones(n)
+        SB, SCc, *_, meta = kernel_shortcut.state(n, qw, pw)
+        assert SB.shape == (2, 2 * n) and meta[kernel_shortcut.ENABLED] == 1
+        D = np.hstack([np.diff(qw, axis=0), np.diff(pw, axis=0)])
+        noise = 16 * np.finfo(float).eps * 2.3 / np.abs(D).max()
+        level = kernel_shortcut.drop_level(noise, kernel_shortcut.BLOCK, 2 * n)
+        assert np.abs(SCc[1:] @ SB - D).max() <= level * np.abs(D).max()
+    # more directions than MAX_RANK are found in the first block and the scan stops there
+    rng = np.random.default_rng(1)
+    assert kernel_shortcut.increment_basis(rng.standard_normal((4096, 20))) is None
 
 
 def persistent_problem(seed, n=12):

@@ -116,9 +116,12 @@ def _check_plane(plane: str) -> str:
 
 
 def _positive(name: str, value) -> float:
+    if isinstance(value, (str, bytes, bool, np.bool_)):  # "210e9" and True: not numbers
+        raise InputError(f"{name} must be a number; got {type(value).__name__} {value!r} "
+                         "(write it without quotes)")
     try:
         x = float(value)
-    except (TypeError, ValueError) as exc:
+    except (TypeError, ValueError, OverflowError) as exc:
         raise InputError(f"{name} must be a number; got {value!r}") from exc
     if not (np.isfinite(x) and x > 0):
         raise InputError(f"{name} must be > 0; got {value!r}")
@@ -182,6 +185,8 @@ def isotropic(E: float, nu: float, plane: str = "strain", density: float = 1.0) 
     E = _positive("E", E)
     plane = _check_plane(plane)
     try:
+        if isinstance(nu, (str, bytes, bool, np.bool_)):
+            raise TypeError(f"{type(nu).__name__}")
         nu = float(nu)
     except (TypeError, ValueError) as exc:
         raise InputError(f"nu must be a number; got {nu!r}") from exc

@@ -300,8 +300,11 @@ def from_file(path, element: str | None = None, boundaries: dict | None = None) 
 
     from skfem import Mesh
 
+    from ...model.limits import check_file_size
+
     if not Path(path).is_file():
         raise InputError(f"mesh file {str(path)!r} does not exist")
+    check_file_size(path, "mesh file")
     import logging
 
     quiet = logging.getLogger("skfem.io.meshio")  # hexahedral facets are oriented below
@@ -309,8 +312,9 @@ def from_file(path, element: str | None = None, boundaries: dict | None = None) 
     quiet.setLevel(logging.ERROR)
     try:
         mesh = Mesh.load(str(path))
-    except Exception as exc:  # meshio raises many types
-        # the reader's message may quote the file: name only the error's type
+    except (Exception, SystemExit) as exc:  # meshio raises many types, and may call sys.exit
+        # (RecursionError and MemoryError are Exceptions); the reader's message may quote the
+        # file: name only the error's type
         raise InputError(f"could not read mesh file {str(path)!r} ({type(exc).__name__}); "
                          "give a mesh format meshio reads (gmsh .msh, .vtk, .xdmf)") from None
     finally:

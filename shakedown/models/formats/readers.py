@@ -29,6 +29,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ...model.errors import InputError
+from ...model.limits import check_array_size, check_file_size
 
 #: File suffixes each reader accepts.
 SUFFIXES = (".mtx", ".mat", ".npz", ".csv")
@@ -45,7 +46,45 @@ def _path(path) -> Path:
             f"{p}: unknown file type {p.suffix!r}; use one of {', '.join(SUFFIXES)}")
     if not p.is_file():
         raise ModelFileError(f"{p}: no such file")
+    try:
+        check_file_size(p, "model file")  # before anything is read or hashed
+    except InputError as exc:
+        raise ModelFileError(str(exc)) from None
     return p
+
+
+def _npy_header(f, version):
+    """``(shape, fortran_order, dtype)`` of an ``.npy`` header (any format version)."""
+    try:
+        from numpy.lib._format_impl import _read_array_header  # numpy >= 2
+    except ImportError:  # pragma: no cover - numpy 1.x
+        from numpy.lib.format import _read_array_header
+    return _read_array_header(f, version)
+
+
+def _npz_member(p: Path, data, name: str) -> None:
+    """Refuse an ``.npz`` member whose header declares more than the member holds or than the
+    machine can hold, before numpy allocates it."""
+    import zipfile
+
+    try:
+        with zipfile.ZipFile(p) as z:
+            info = z.getinfo(name + ".npy")
+            with z.open(info) as f:
+                version = np.lib.format.read_magic(f)
+                shape, _, dtype = _npy_header(f, version)
+                header_bytes = f.tell()
+    except (KeyError, ValueError, OSError, zipfile.BadZipFile, EOFError) as exc:
+        raise ModelFileError(f"{p}: array {name!r} has an unreadable header "
+                             f"({type(exc).__name__})") from None
+    count = int(np.prod(shape, dtype=object))
+    try:
+        check_array_size(p, f"array {name!r} (shape {shape})", count, dtype.itemsize)
+    except InputError as exc:
+        raise ModelFileError(str(exc)) from None
+    if count * dtype.itemsize > info.file_size - header_bytes:
+        raise ModelFileError(f"{p}: array {name!r} declares shape {shape} ({count * dtype.itemsize} "
+                             f"bytes) but holds only {info.file_size - header_bytes} bytes: a damaged file")
 
 
 def _csv_rows(p: Path) -> list[list[float]]:
@@ -83,6 +122,7 @@ def _container(p: Path, variable: str | None):
         with data:
             names = list(data.files)
             name = _pick(p, variable, names)
+            _npz_member(p, data, name)
             try:
                 return np.array(data[name])
             except ValueError:
@@ -146,9 +186,36 @@ def _mtx(p: Path):
 
     with open(p, "rb") as f:
         head = f.readline(200)
+        size_line = b"%"
+        while size_line.startswith(b"%") or not size_line.strip():
+            size_line = f.readline(400)
+            if not size_line:
+                break
     if not head.lower().startswith(b"%%matrixmarket"):
         raise ModelFileError(f"{p}: line 1: not a Matrix Market header (expected "
                              "'%%MatrixMarket matrix ...')")
+    words = head.lower().split()
+    if b"pattern" in words or b"complex" in words:
+        field = "pattern" if b"pattern" in words else "complex"
+        raise ModelFileError(f"{p}: line 1: a Matrix Market {field} file holds no real values "
+                             "(a pattern file would be read as a matrix of ones); write the "
+                             "matrix as 'real' or 'integer'")
+    try:
+        dims = [int(w) for w in size_line.split()]
+    except ValueError:
+        dims = []
+    if len(dims) not in (2, 3) or min(dims) < 0:
+        raise ModelFileError(f"{p}: the size line must hold 'rows cols' (array) or "
+                             "'rows cols entries' (coordinate) as integers >= 0")
+    entries = dims[2] if len(dims) == 3 else dims[0] * dims[1]
+    try:
+        check_array_size(p, f"the size line ({' '.join(map(str, dims))})", entries, 16)
+        check_array_size(p, "the size line's rows", dims[0], 8)
+    except InputError as exc:
+        raise ModelFileError(str(exc)) from None
+    if entries > p.stat().st_size:  # every entry takes at least 2 bytes of text
+        raise ModelFileError(f"{p}: the size line declares {entries} entries but the file has "
+                             f"only {p.stat().st_size} bytes: a damaged or truncated file")
     try:
         return scipy.io.mmread(p)
     except Exception as exc:  # noqa: BLE001
@@ -212,7 +279,14 @@ def read_matrix(path, variable: str | None = None, *, sparse: bool = False):
     _finite(p, what, value)
     if sparse:
         return sp.csr_matrix(value)
-    return value.toarray() if sp.issparse(value) else value
+    if sp.issparse(value):
+        try:
+            check_array_size(p, f"{what} as a dense {value.shape} array",
+                             value.shape[0] * value.shape[1])
+        except InputError as exc:
+            raise ModelFileError(str(exc)) from None
+        return value.toarray()
+    return value
 
 
 def read_vector(path, variable: str | None = None, *, size: int | None = None) -> np.ndarray:

@@ -27,7 +27,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ...model.errors import InputError
+from ...model.limits import check_array_size, check_file_size
 from ...model.loading import LoadCycle
+from ...model.validation import check_count, check_positive
 from .readers import ModelFileError
 
 _COLUMN = re.compile(r"^([qp])_([1-9][0-9]*)$")
@@ -77,6 +80,10 @@ def _read(p: Path) -> tuple[list[str], np.ndarray]:
         raise ModelFileError(f"{p}: a load record must be a .csv file; got {p.suffix!r}")
     if not p.is_file():
         raise ModelFileError(f"{p}: no such file")
+    try:
+        check_file_size(p, "load record")
+    except InputError as exc:
+        raise ModelFileError(str(exc)) from None
     rows, header = [], None
     with open(p, newline="", encoding="utf-8", errors="replace") as f:
         for line_no, row in enumerate(csv.reader(f), start=1):
@@ -122,6 +129,11 @@ def _columns(p: Path, header: list[str]) -> tuple[int, np.ndarray, np.ndarray]:
                                  "'p_<node>' (nodes numbered from 1)")
         found[(m.group(1), int(m.group(2)))] = i
     n = max((j for _, j in found), default=0)
+    if n > len(header):  # (before listing the missing columns: q_1000000000)
+        kind, j = max(found, key=lambda kj: kj[1])
+        raise ModelFileError(f"{p}: column '{kind}_{j}' names node {j}, but the record has "
+                             f"only {len(header) - 1} data columns (q_j and p_j of nodes "
+                             f"1..{(len(header) - 1) // 2} at most)")
     missing = [f"{k}_{j}" for j in range(1, n + 1) for k in "qp" if (k, j) not in found]
     if n == 0 or missing:
         raise ModelFileError(f"{p}: columns missing: {', '.join(missing) or 'q_1, p_1'} (every "
@@ -159,14 +171,17 @@ def read_load_record(path, period: float, *, n_samples: int = 256, t_start: floa
         or a resampling error above ``max_error``.
     """
     p = Path(path)
-    period = float(period)
-    if not np.isfinite(period) or period <= 0:
-        raise ModelFileError(f"{p}: period = {period!r} must be a positive number")
-    if int(n_samples) != n_samples or n_samples < 2:
-        raise ModelFileError(f"{p}: n_samples = {n_samples!r} must be an integer >= 2")
-    n_samples = int(n_samples)
+    try:
+        period = check_positive("period", period)
+        n_samples = check_count("n_samples", n_samples, 2)
+    except InputError as exc:
+        raise ModelFileError(f"{p}: {exc}") from None
     header, data = _read(p)
     n, qi, pi = _columns(p, header)
+    try:  # the resampled period and its copies (about 6 arrays of n_samples x 2N)
+        check_array_size(p, f"n_samples = {n_samples} x {2 * n} columns", 6 * n_samples * 2 * n)
+    except InputError as exc:
+        raise ModelFileError(str(exc)) from None
     t = data[:, header.index("t")]
     if not np.all(np.isfinite(data)):
         raise ModelFileError(f"{p}: holds non-finite numbers (nan or inf)")

@@ -74,7 +74,13 @@ def _partition(ctx, options):
         except ValueError as exc:
             raise SceneError(f"[analyses.stability] key 'states': {exc}") from None
     if kind == "welded":
-        q, p = ctx.load.evaluate(np.array(options["time"]), options["load_factor"])
+        from ...model.validation import check_load_factor  # (issue 24: lam < 0 refused)
+
+        try:
+            lam = check_load_factor(options["load_factor"], ctx.load)
+        except ValueError as exc:
+            raise SceneError(f"[analyses.stability] key 'load_factor': {exc}") from None
+        q, p = ctx.load.evaluate(np.array(options["time"]), lam)
         return classify_nodes(np.zeros(n), q, p, ctx.system.friction)
     raise SceneError(
         f"[analyses.stability] key 'partition' must be 'all-slip', 'states' or 'welded'; "

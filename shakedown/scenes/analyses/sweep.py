@@ -160,7 +160,7 @@ def format_table(summary, name: str = "W*") -> str:
 
 def run(ctx, options: dict) -> dict:
     from ...studies.crack_study import run_sweep
-    from ...studies.safe_files import refuse_link, write_atomic
+    from ...studies.safe_files import refuse_link
 
     scene = getattr(ctx, "scene", None)
     spec = spec_from_scene(scene, options, ctx.system, ctx.load)
@@ -191,7 +191,7 @@ def run(ctx, options: dict) -> dict:
         digest[key] = [{**r, **{c: int(r[c]) + 1 for c in ("realisation", "state") if c in r}}
                        for r in digest[key]]
     ctx.output.write_json("sweep.json", digest)
-    write_atomic(ctx.output.path / "sweep_verdict.txt", (res.verdict + "\n").encode())
+    ctx.output.write_text("sweep_verdict.txt", res.verdict + "\n")
     D = spec.dissipation_name
     unit = f" {spec.source.energy_unit}" if spec.source is not None else ""
     print(f"\n{D}{unit} per realisation and load factor (min / max over initial states):")

@@ -65,6 +65,8 @@ def _check_types(table: dict, allowed: dict, name: str):
         if not ok:
             want = " or ".join("list" if t is list else t.__name__ for t in types)
             raise SceneError(f"[{name}] key {key!r} = {value!r} must be a {want}")
+        if key == "seed" and not 0 <= value < 2**128:  # numpy's seeds: integers >= 0
+            raise SceneError(f"[{name}] key 'seed' = {value!r} must be an integer >= 0")
 
 
 def _pair_or_number(key, value):

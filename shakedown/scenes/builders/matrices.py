@@ -110,6 +110,9 @@ def _array(table, key, value):
         )
     try:
         arr = np.array(value, dtype=float)
+    except OverflowError:  # an integer beyond 1.8e308
+        raise SceneError(f"[{table}] key {key!r} holds an integer too large for a float (more "
+                         "than 1.8e308): express it in larger units") from None
     except (TypeError, ValueError):
         raise SceneError(
             f"[{table}] key {key!r} = {value!r} must be a number or a (nested) list of numbers"
