@@ -52,6 +52,11 @@ class ConstraintSet:
         Time (cycles) at which each constraint reaches its extreme position.
     sep_G, sep_c, sep_m : ndarray
         No-separation rows ``-(B^T v)_j <= p0_j + lam min_t p1_j`` (``p_w + B^T v >= 0``).
+    row_labels : tuple of str, optional
+        Names of the rows when they are not the 2-D ``I_j`` / ``II_j`` (3-D facets).
+    pairs : ndarray of int, shape (P, 2), optional
+        Rows whose meeting in ``H`` defines ``lam_adj`` (default ``(j, N + j)``: ``I_j``,
+        ``II_j``; 3-D: opposite facets of one node).
     """
 
     G: np.ndarray
@@ -61,13 +66,31 @@ class ConstraintSet:
     sep_G: np.ndarray
     sep_c: np.ndarray
     sep_m: np.ndarray
+    row_labels: tuple | None = None
+    pairs: np.ndarray | None = None
 
     @property
     def n_nodes(self) -> int:
+        """Columns of ``G`` (the unknowns: ``N`` in 2-D, ``2N`` slip components in 3-D)."""
         return self.G.shape[1]
 
+    @property
+    def n_rows(self) -> int:
+        """Rows of ``G`` (``2N`` in 2-D)."""
+        return self.G.shape[0]
+
+    def adjacency_pairs(self) -> np.ndarray:
+        """Row pairs of ``lam_adj``, shape (P, 2) (2-D: ``(j, N + j)``)."""
+        if self.pairs is not None:
+            return np.asarray(self.pairs)
+        n = self.n_nodes
+        return np.column_stack([np.arange(n), np.arange(n, 2 * n)])
+
     def labels(self) -> list[str]:
-        """``"I_1" .. "I_N", "II_1" .. "II_N"`` (nodes numbered from 1 for people)."""
+        """``"I_1" .. "I_N", "II_1" .. "II_N"`` (nodes numbered from 1 for people), or
+        ``row_labels`` when given."""
+        if self.row_labels is not None:
+            return list(self.row_labels)
         n = self.n_nodes
         return [f"I_{j + 1}" for j in range(n)] + [f"II_{j + 1}" for j in range(n)]
 
@@ -139,9 +162,7 @@ def extreme_constraints(system: DiscreteSystem, load: LoadCycle) -> ConstraintSe
         G = sp.vstack([A - FBt, -(A + FBt)], format="csr")
         sep_G = sp.csr_matrix(-B.T)
     else:
-        FBt = f[:, None] * B.T
-        G = np.vstack([A - FBt, -(A + FBt)])
-        sep_G = -B.T.copy()
+        return family_constraints(system, load, [(1.0, f), (-1.0, f)])
     c = np.concatenate([f * load.p0 - load.q0, f * load.p0 + load.q0])
     mI, tI = load.periodic_min(-1.0, f)
     mII, tII = load.periodic_min(1.0, f)
@@ -149,6 +170,58 @@ def extreme_constraints(system: DiscreteSystem, load: LoadCycle) -> ConstraintSe
     return ConstraintSet(
         G=G, c=c, m=np.concatenate([mI, mII]), t_extreme=np.concatenate([tI, tII]),
         sep_G=sep_G, sep_c=load.p0.copy(), sep_m=mp,
+    )
+
+
+def family_constraints(system, load, families, *, row_labels=None, pairs=None) -> ConstraintSet:
+    """Extreme constraints of families of friction hyperplanes, one row per node and family.
+
+    Family ``(w, phi)`` asks ``w_j . q_j(t) <= phi_j p_j(t)`` at every node ``j`` and time
+    ``t``; with ``q = q_w + A v``, ``p = p_w + B^T v`` its extreme row is
+
+        (w_j . (A v)_j - phi_j (B^T v)_j)  <=  phi_j p0_j - w_j . q0_j
+                                               + lam min_t (phi_j p1_j(t) - w_j . q1_j(t)).
+
+    2-D: ``w = +1`` / ``-1`` and ``phi = f`` are the families ``I`` / ``II`` (section 3).  3-D:
+    ``w_j`` is a 2-vector (a facet normal of node ``j``'s polygon, divided by the friction
+    coefficients for elliptic cones) and ``(A v)_j`` the node's two rows of ``A``.  Rows are
+    stacked family by family (dense ``A``, ``B``).
+
+    Parameters
+    ----------
+    families : list of (w, phi)
+        ``w``: scalar or (N,) in 2-D, (N, 2) in 3-D; ``phi``: scalar or (N,).
+    row_labels, pairs : optional
+        Stored on the :class:`ConstraintSet` (default: the 2-D ``I_j`` / ``II_j``).
+    """
+    n = system.n_nodes
+    dim = getattr(system, "dim", 2)
+    A = system.A.toarray() if sp.issparse(system.A) else system.A
+    Bt = (system.B.toarray() if sp.issparse(system.B) else system.B).T
+    q0 = np.asarray(load.q0, float)
+    rows, cs, ms, ts = [], [], [], []
+    for w, phi in families:
+        phi = np.broadcast_to(np.asarray(phi, float), (n,))
+        FBt = phi[:, None] * Bt
+        if dim == 2:
+            w = np.asarray(w, float)
+            rows.append((A if w.ndim == 0 and w == 1.0 else -A if w.ndim == 0 and w == -1.0
+                         else np.broadcast_to(w, (n,))[:, None] * A) - FBt)
+            wq0 = w * q0
+        else:
+            w = np.broadcast_to(np.asarray(w, float), (n, 2))
+            A3 = A.reshape(n, 2, 2 * n)
+            rows.append(w[:, 0, None] * A3[:, 0] + w[:, 1, None] * A3[:, 1] - FBt)
+            wq0 = np.einsum("jc,jc->j", w, q0)
+        cs.append(phi * load.p0 - wq0)
+        m, t = load.periodic_min(-w, phi)
+        ms.append(m)
+        ts.append(t)
+    mp, _ = load.periodic_min(np.zeros_like(q0), 1.0)
+    return ConstraintSet(
+        G=np.vstack(rows), c=np.concatenate(cs), m=np.concatenate(ms),
+        t_extreme=np.concatenate(ts), sep_G=-Bt.copy(), sep_c=np.asarray(load.p0, float).copy(),
+        sep_m=mp, row_labels=row_labels, pairs=pairs,
     )
 
 

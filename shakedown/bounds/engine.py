@@ -42,6 +42,7 @@ from .constraints import (
 from .dense_path import solve_dense
 from .highs_path import solve_highs
 from .lp import INF, ReusableLP
+from .outcome import intervals_option as _intervals_option
 from .result import LAM_RTOL, ShakedownBounds
 
 #: What ``only=`` may name.
@@ -58,6 +59,7 @@ def shakedown_bounds(
     separation: bool = True,
     only=None,
     solver: str = "auto",
+    facets: int | None = None,
 ) -> ShakedownBounds:
     """Shakedown load factors ``lam1 <= lam2`` with certificates (MODEL.md s.3).
 
@@ -89,6 +91,9 @@ def shakedown_bounds(
         The quantities wanted, among ``"lam1"``, ``"lam2"``, ``"lam_adj"``,
         ``"lam_separation"`` (``lam2`` is always computed); overrides ``intervals``,
         ``adjacency`` and ``separation``.  E.g. ``only=("lam1", "lam2")`` for a sweep.
+    facets : int, optional
+        3-D only (``system.dim == 3``): facets ``k`` per node of the inscribed polygons of the
+        polyhedral lower-bound candidates (default 8).
     solver : {"auto", "highs"}
         ``"auto"``: dense interior point + basis identification for the ``lam2`` LP, then the
         lock-step dense dual simplex of :mod:`shakedown.bounds.dense_lp` warm-started from the
@@ -101,6 +106,13 @@ def shakedown_bounds(
         system (:class:`~shakedown.model.uncondensed.UncondensedSystem`) has dense constraint
         rows ``A -/+ F B^T`` (a Schur complement): they are formed by ``N`` sparse solves (never
         all of ``K``) and take the dense path.
+
+    A three-dimensional system (``system.dim == 3``) goes to the cone engine
+    (:func:`shakedown.bounds.cones.engine.cone_bounds`, MODEL.md s.8.3): ``lam2`` on the
+    circular (or elliptic) friction cones with a certified bracket, and with ``intervals`` /
+    ``adjacency`` the polyhedral candidates ``lam1_cone`` / ``lam_adj_cone`` on inscribed
+    ``facets``-gons; it returns a :class:`~shakedown.bounds.cones.result.ConeBounds`
+    (``separation`` and ``solver`` do not apply).  ``only=("lam2",)`` for large systems.
 
     Returns
     -------
@@ -117,6 +129,14 @@ def shakedown_bounds(
     >>> round(b.lam1, 12), round(b.lam2, 12)
     (1.0, 1.0)
     """
+    if getattr(system, "dim", 2) == 3 or getattr(load, "dim", 2) == 3:
+        from .cones.engine import cone_bounds
+
+        return cone_bounds(system, load, lam=lam, only=only, facets=facets, intervals=intervals,
+                           adjacency=adjacency)
+    if facets is not None:
+        raise InputError(f"facets applies to three-dimensional systems only (system.dim = 3); "
+                         f"got facets={facets!r} for a 2-D system: leave it out")
     citations.register("melan1936", "klarbring2007", "ahn2008")
     t0 = time.perf_counter()
     cs = extreme_constraints(system, load)
@@ -191,17 +211,6 @@ def _only(only):
             f"only: unknown quantity {bad[0]!r}; choose from {', '.join(QUANTITIES)}")
     return ("lam1" if "lam1" in wanted else False), "lam_adj" in wanted, \
         "lam_separation" in wanted
-
-
-def _intervals_option(intervals):
-    """``"lam1"``, ``"all"`` or ``False`` from the ``intervals=`` argument."""
-    if intervals is True or intervals == "all":
-        return "all"
-    if intervals is False or intervals is None:
-        return False
-    if intervals == "lam1":
-        return "lam1"
-    raise InputError(f"intervals must be 'lam1', True ('all') or False; got {intervals!r}")
 
 
 def chebyshev_centre(cs: ConstraintSet, lam: float, *, solver: str = "auto"):

@@ -31,6 +31,7 @@ class HighsModel:
     def __init__(self, cs: ConstraintSet):
         n = cs.n_nodes
         self.n = n
+        self.R = len(cs.c)  # 2N in 2-D (rows I, II); any number of families in 3-D
         if sp.issparse(cs.G):  # a sparse system: the model is built without densifying
             rows = sp.bmat([[cs.G, -cs.m[:, None]], [cs.sep_G, -cs.sep_m[:, None]]],
                            format="csc")
@@ -40,8 +41,8 @@ class HighsModel:
             )
         self.c = cs.c
         self.sep_c = cs.sep_c
-        row_lo = np.full(3 * n, -np.inf)
-        row_hi = np.concatenate([cs.c, np.full(n, np.inf)])  # separation rows off
+        row_lo = np.full(self.R + len(cs.sep_c), -np.inf)
+        row_hi = np.concatenate([cs.c, np.full(len(cs.sep_c), np.inf)])  # separation rows off
         col_lo = np.concatenate([np.full(n, -np.inf), [0.0]])
         col_hi = np.full(n + 1, np.inf)
         cost = np.zeros(n + 1)
@@ -69,8 +70,8 @@ class HighsModel:
         for k in tight:
             lp.set_row_bounds(k, self.c[k], self.c[k])
         if separation:
-            for j in range(self.n):
-                lp.set_row_bounds(2 * self.n + j, -np.inf, self.sep_c[j])
+            for j in range(len(self.sep_c)):
+                lp.set_row_bounds(self.R + j, -np.inf, self.sep_c[j])
         ans = lp.solve()
         if method == "simplex" and ans.status == "optimal" \
                 and ans.max_residual > self.resolve_above:
@@ -85,8 +86,8 @@ class HighsModel:
         for k in tight:
             lp.set_row_bounds(k, -np.inf, self.c[k])
         if separation:
-            for j in range(self.n):
-                lp.set_row_bounds(2 * self.n + j, -np.inf, np.inf)
+            for j in range(len(self.sep_c)):
+                lp.set_row_bounds(self.R + j, -np.inf, np.inf)
         if ans.status == "optimal":
             for key, val in zip(
                 RESIDUAL_NAMES,
@@ -107,6 +108,7 @@ def solve_highs(cs: ConstraintSet, has_periodic_part: bool, intervals, adjacency
     capped LPs sharing their tight rows, incumbent pruning: :mod:`.highs_pruning`); ``"all"`` /
     ``True``: every interval exactly."""
     n = cs.n_nodes
+    R = len(cs.c)  # 2N in 2-D
     eng = HighsModel(cs)
     scale_m = np.abs(cs.m).max(initial=0.0)
     messages = []
@@ -118,7 +120,7 @@ def solve_highs(cs: ConstraintSet, has_periodic_part: bool, intervals, adjacency
     lam2 = value(main)
     status = "bounded"
     v_at_lam2 = main.x[:n].copy() if main.status == "optimal" else np.zeros(0)
-    certificate = main.row_dual[: 2 * n].copy() if main.status == "optimal" else np.zeros(0)
+    certificate = main.row_dual[:R].copy() if main.status == "optimal" else np.zeros(0)
     if main.status.startswith("unbounded"):
         # distinguish "unbounded" from "infeasible" (HiGHS may report either way)
         feas = eng.run("min")
@@ -140,7 +142,7 @@ def solve_highs(cs: ConstraintSet, has_periodic_part: bool, intervals, adjacency
             status = "unbounded"
             messages.append("a safe state exists for every lam (the safe region moves with lam)")
     out = PathOutcome(lam1=np.nan, lam2=lam2, status=status, messages=messages,
-                      lam_low=np.full(2 * n, np.nan), lam_high=np.full(2 * n, np.nan),
+                      lam_low=np.full(R, np.nan), lam_high=np.full(R, np.nan),
                       v_at_lam2=v_at_lam2, certificate=certificate)
     sep_answer = None
     if sparse and separation and status != "infeasible":  # next to the lam2 basis: cheap
@@ -154,32 +156,32 @@ def solve_highs(cs: ConstraintSet, has_periodic_part: bool, intervals, adjacency
             cs.labels(), out.lam_low, np.where(out.hi_exact, out.lam_high, np.inf), lam2,
             messages)
     elif intervals and status != "infeasible":
-        tight_at_end = np.zeros(2 * n, bool)
+        tight_at_end = np.zeros(R, bool)
         if main.status == "optimal":
             # constraints tight at the lam2 optimum are active up to lam2 (can't go higher)
             tight_at_end[tight_rows(cs, v_at_lam2, lam2)] = True
-        for k in range(2 * n):
+        for k in range(R):
             if tight_at_end[k]:
                 out.lam_high[k] = lam2
             else:
                 out.lam_high[k] = value(eng.run("max", tight=(k,)))
-        for k in range(2 * n):
+        for k in range(R):
             if np.isnan(out.lam_high[k]):
                 continue  # never active
             out.lam_low[k] = value(eng.run("min", tight=(k,)))
-        out.hi_exact = np.ones(2 * n, bool)
+        out.hi_exact = np.ones(R, bool)
         out.lam1, out.limiting = lam1_from_intervals(cs.labels(), out.lam_low, out.lam_high, lam2,
                                                      messages)
     if adjacency and status != "infeasible":
         out.lam_adj = np.inf
-        for j in range(n):
-            a = value(eng.run("min", tight=(j, n + j)))
+        for j, pair in enumerate(cs.adjacency_pairs()):  # 2-D: (I_j, II_j)
+            a = value(eng.run("min", tight=tuple(int(k) for k in pair)))
             if np.isfinite(a) and a < out.lam_adj:
                 out.lam_adj, out.adj_node = a, j
     if separation and status != "infeasible":
         if sep_answer is None:
             sep_answer = eng.run("max", separation=True)
-        out.lam_sep, out.sep_nodes = separation_outcome(sep_answer, lam2, n)
+        out.lam_sep, out.sep_nodes = separation_outcome(sep_answer, lam2, n, rows=R)
     out.residuals = dict(eng.worst)
     out.n_lps = eng.lp.n_solves
     out.iterations = eng.lp.total_iterations

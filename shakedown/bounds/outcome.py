@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..model.errors import InputError
 from .lp import LPAnswer
 from .result import LAM_RTOL
 
@@ -66,12 +67,25 @@ def lam1_from_intervals(labels, lam_low, lam_high, lam2, messages):
     return lam1, limiting
 
 
-def separation_outcome(ans: LPAnswer, lam2: float, n: int):
-    """``(lam_separation, separation_nodes)`` from the no-separation LP (nondimensional)."""
+def separation_outcome(ans: LPAnswer, lam2: float, n: int, rows: int | None = None):
+    """``(lam_separation, separation_nodes)`` from the no-separation LP (nondimensional); the
+    first ``rows`` rows (default ``2 n``: I and II) are the friction rows, the ``n``
+    separation rows follow."""
     lam_sep = value(ans)
     sep_nodes = ()
     if ans.status == "optimal" and (not np.isfinite(lam2) or lam_sep < lam2 - 1e-9 * max(1, lam2)):
-        duals = ans.row_dual[2 * n :]
+        duals = ans.row_dual[(2 * n if rows is None else rows):]
         dmax = float(np.abs(duals).max(initial=0.0))
         sep_nodes = tuple(int(j) for j in np.flatnonzero(np.abs(duals) > 1e-9 * dmax))
     return lam_sep, sep_nodes
+
+
+def intervals_option(intervals):
+    """``"lam1"``, ``"all"`` or ``False`` from the ``intervals=`` argument."""
+    if intervals is True or intervals == "all":
+        return "all"
+    if intervals is False or intervals is None:
+        return False
+    if intervals == "lam1":
+        return "lam1"
+    raise InputError(f"intervals must be 'lam1', True ('all') or False; got {intervals!r}")

@@ -140,6 +140,13 @@ REFERENCES: dict[str, str] = {
   year = {2018},
   doi = {10.1007/s12532-017-0130-5}
 }""",
+    "goulart2024": """@misc{goulart2024,
+  author = {Goulart, Paul J. and Chen, Yuwen},
+  title = {Clarabel: An interior-point solver for conic programs with quadratic objectives},
+  year = {2024},
+  eprint = {2405.12762},
+  archiveprefix = {arXiv}
+}""",
     "gustafsson2020": """@article{gustafsson2020,
   author = {Gustafsson, Tom and McBain, G. D.},
   title = {scikit-fem: A {P}ython package for finite element assembly},
@@ -214,6 +221,7 @@ METHODS: dict[str, str] = {
     "martins1999": "dynamic stability of frictional systems (flutter / divergence)",
     "huangfu2018": "HiGHS linear-programming solver",
     "gustafsson2020": "scikit-fem finite element assembly",
+    "goulart2024": "Clarabel conic (second-order cone) solver",
     "lemke1965": "Lemke's complementary pivoting",
     "cattaneo1938": "Cattaneo partial slip",
     "mindlin1949": "Mindlin partial slip",

@@ -183,3 +183,61 @@ def plot_region_vs_lam(bounds: ShakedownBounds, *, system=None, load=None, lams=
         ax.legend(fontsize=8, loc="lower left")
     ax.set_title("extreme constraints still active against the load factor", fontsize=10)
     return ax
+
+
+def plot_dissipation_vs_lam(lams, dissipation, bounds, *, ax=None, log=True):
+    """Dissipation per cycle from many initial states against ``lam``, with the bounds marked.
+
+    Parameters
+    ----------
+    lams : array_like, shape (L,)
+        Load factors of the runs.
+    dissipation : array_like, shape (L, S)
+        Dissipation per cycle [force x length] of ``S`` runs (initial states) at each load
+        factor (e.g. the steady ``W``, or the last cycle's); ``nan`` for a missing run.
+    bounds : ShakedownBounds or ConeBounds
+        2-D: ``lam1``, ``lam2`` and ``lam_adj`` are marked; 3-D (``bounds.dim == 3``): ``lam2``
+        (Melan, certified), ``lam_adj_cone`` and ``lam1_cone`` (inscribed ``k``-gons) and the
+        polygon's ``lam2``.
+    log : bool
+        Logarithmic dissipation axis (zero dissipation drawn at the bottom of the axis).
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
+    ax = _ax(ax)
+    lams = np.asarray(lams, float)
+    W = np.asarray(dissipation, float)
+    if W.ndim != 2 or W.shape[0] != lams.shape[0]:
+        raise InputError(f"dissipation must have shape (len(lams), n_states) = ({lams.size}, S); "
+                         f"got {W.shape}")
+    pos = W[np.isfinite(W) & (W > 0)]
+    floor = pos.min() / 10 if (log and pos.size) else 0.0
+    shown = np.where(np.isfinite(W), np.maximum(W, floor), np.nan)
+    for j in range(W.shape[1]):
+        ax.plot(lams, shown[:, j], "o", mfc="none", ms=5, color="C0", alpha=0.6,
+                label="runs (initial states)" if j == 0 else None)
+    ax.plot(lams, np.nanmax(shown, axis=1), "-", color="C0", lw=1, label="max over states")
+    ax.plot(lams, np.nanmin(shown, axis=1), "--", color="C3", lw=1, label="min over states")
+    if log and pos.size:
+        ax.set_yscale("log")
+    marks = []
+    if getattr(bounds, "dim", 2) == 3:
+        k = bounds.facets
+        marks = [(bounds.lam2, "k", "--", r"$\lambda_2$ (cones, certified)"),
+                 (bounds.lam_adj_cone, "tab:red", "-.", rf"$\lambda_{{adj}}$ ({k}-gons)"),
+                 (bounds.lam1_cone, "tab:purple", ":", rf"$\lambda_1$ ({k}-gons)"),
+                 (bounds.lam2_polygon, "0.5", ":", rf"$\lambda_2$ ({k}-gons)")]
+    else:
+        marks = [(bounds.lam2, "k", "--", r"$\lambda_2$"), (bounds.lam1, "tab:purple", ":",
+                                                           r"$\lambda_1$"),
+                 (bounds.lam_adj, "tab:red", "-.", r"$\lambda_{adj}$")]
+    for val, color, ls, name in marks:
+        if np.isfinite(val):
+            ax.axvline(val, color=color, ls=ls, lw=1.2, label=f"{name} = {val:.4g}")
+    ax.set_xlabel(r"load factor $\lambda$")
+    ax.set_ylabel("dissipation per cycle" + (" (0 drawn at the floor)" if log else ""))
+    ax.legend(fontsize=7, loc="upper left")
+    ax.set_title("dissipation per cycle from many initial states, with the bounds", fontsize=10)
+    return ax

@@ -1,0 +1,17 @@
+"""The cone engine: 3-D shakedown bounds on second-order friction cones (MODEL.md s.8.3).
+
+Modules, in the order of the pipeline:
+
+* :mod:`.data` -- the problem in cone units, nondimensional (``s = A v`` as unknowns; the
+  coupling ``E = B^T A^-1 diag(f)``);
+* :mod:`.separation` -- every node's exact worst time (roots of a trigonometric polynomial);
+* :mod:`.socp` -- the relaxations on finite sets of cuts (Clarabel) and their dual bound;
+* :mod:`.melan` -- ``lam2`` by cutting planes with a certified bracket;
+* :mod:`.certify` -- the certificates checked from scratch (safe state, dual bound);
+* :mod:`.polygon` -- the polyhedral candidates ``lam_adj_cone`` / ``lam1_cone`` on inscribed
+  ``k``-gons by the 2-D LP engine;
+* :mod:`.engine`, :mod:`.result` -- :func:`~.engine.cone_bounds` (what
+  :func:`shakedown.shakedown_bounds` calls for ``system.dim == 3``) and :class:`~.result.ConeBounds`.
+
+May import :mod:`shakedown.model` and :mod:`shakedown.bounds` only.
+"""
