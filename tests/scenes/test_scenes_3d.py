@@ -90,3 +90,26 @@ def test_builtin_3d_scene_is_listed_and_builds():
     system, load, _ = build(load_scene("rotating_3d"))
     assert system.dim == 3 and system.is_coupled and load.dim == 3
     assert isinstance(system, sd.DiscreteSystem)
+
+
+@pytest.mark.parametrize("arrays", ["blocks", "K"])
+def test_3d_matrices_from_an_npz_file(tmp_path, arrays):
+    """``file = "system.npz"`` with A, B, C or with the 3N x 3N K (order v_1x, v_1y, ..., w_1, ...)."""
+    rng = np.random.default_rng(0)
+    n = 2
+    M = rng.normal(size=(3 * n, 3 * n))
+    K = M @ M.T + 3 * n * np.eye(3 * n)
+    if arrays == "K":
+        np.savez(tmp_path / "system.npz", K=K)
+    else:
+        np.savez(tmp_path / "system.npz", A=K[:2 * n, :2 * n], B=K[:2 * n, 2 * n:],
+                 C=K[2 * n:, 2 * n:])
+    text = SCENE.replace("A = [[2.0, 0.0], [0.0, 2.0]]\nB = [[0.0], [0.0]]\nC = [[1.0]]",
+                         'file = "system.npz"').replace("q0 = [[0.0, 0.0]]",
+                                                        "q0 = [[0.0, 0.0], [0.1, 0.0]]")
+    text = text.replace("p0 = [1.0]", "p0 = [1.0, 1.0]").replace(
+        "q_cos = [[1.3, 0.0]]", "q_cos = [[1.3, 0.0], [0.0, 0.5]]").replace(
+        "q_sin = [[0.0, 1.3]]", "q_sin = [[0.0, 1.3], [0.5, 0.0]]")
+    system, load, _ = build(load_scene(write(tmp_path, text)))
+    assert system.dim == 3 and system.n_nodes == 2 and load.n_nodes == 2
+    np.testing.assert_allclose(system.K, K, rtol=0, atol=1e-12 * np.abs(K).max())
