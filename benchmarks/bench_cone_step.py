@@ -157,7 +157,12 @@ def part_big(n, lam, S=64):
 
     s, load = coupled_system_3d(n, seed=1)
     t0 = time.perf_counter()
-    run = sd.solve_cycles(s, load, lam, steps_per_cycle=S, max_cycles=200)
+
+    def progress(c, total, W):  # one line per period, so that an interrupted run still reports
+        print(f"  N = {n}: period {c} done at {time.perf_counter() - t0:.1f} s, W = {W:.6g}, "
+              f"load {os.getloadavg()[0]:.1f}", flush=True)
+
+    run = sd.solve_cycles(s, load, lam, steps_per_cycle=S, max_cycles=200, progress=progress)
     wall = time.perf_counter() - t0
     slipped = n - run.stuck_nodes.size if run.period else -1
     return dict(n=n, lam=lam, wall=wall, status=run.status, cycles=run.n_cycles,

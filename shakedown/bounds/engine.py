@@ -130,7 +130,10 @@ def shakedown_bounds(
     (1.0, 1.0)
     """
     if getattr(system, "dim", 2) == 3 or getattr(load, "dim", 2) == 3:
+        from ..model.validation import check_same_dimension
         from .cones.engine import cone_bounds
+
+        check_same_dimension(system, load)  # a 2-D system with a 3-D load: named by the check
 
         return cone_bounds(system, load, lam=lam, only=only, facets=facets, intervals=intervals,
                            adjacency=adjacency)

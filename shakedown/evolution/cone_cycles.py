@@ -27,7 +27,8 @@ import numpy as np
 from ..model.errors import InputError, ShapeError
 from ..model.threads import single_blas_thread
 from ..model.validation import check_count, check_load_factor, check_same_nodes
-from .cone_step import STATE_NAMES_3D, ConeStepSolver
+from .cone_step import ConeStepSolver
+from .cone_tables import table_3d
 from .cycle_results import SHAKEDOWN_FACTOR, CycleRun, _energy
 from .events import CycleRecord
 from .step_types import SEPARATED
@@ -314,31 +315,6 @@ def _trust_3d(run, system, load, orbit, solver):
            f"({error:.3g}); rerun with more steps_per_cycle")
     return replace(run, sampling_error=error, within_sampling_error=True,
                    message=run.message + "; " + msg)
-
-
-def table_3d(records):
-    """The time series of 3-D records, one row per (time, node): ``cycle``, ``t``, ``node``,
-    ``slip_x``, ``slip_y``, ``gap``, ``q_x``, ``q_y``, ``p``, ``state``
-    (:data:`~.cone_step.STATE_NAMES_3D`)."""
-    import pandas as pd
-
-    frames = []
-    for i, rec in enumerate(records):
-        sl = slice(0, None) if i == 0 else slice(1, None)
-        t = rec.t[sl]
-        K, n = rec.w[sl].shape
-        frames.append(pd.DataFrame({
-            "cycle": np.full(K * n, int(round(rec.t[-1])) if rec.t.size else 0),
-            "t": np.repeat(t, n), "node": np.tile(np.arange(n), K),
-            "slip_x": rec.v[sl][..., 0].ravel(), "slip_y": rec.v[sl][..., 1].ravel(),
-            "gap": rec.w[sl].ravel(),
-            "q_x": rec.q[sl][..., 0].ravel(), "q_y": rec.q[sl][..., 1].ravel(),
-            "p": rec.p[sl].ravel(),
-            "state": pd.Categorical.from_codes(rec.states[sl].ravel().astype(int),
-                                               categories=list(STATE_NAMES_3D)),
-        }))
-    cols = ["cycle", "t", "node", "slip_x", "slip_y", "gap", "q_x", "q_y", "p", "state"]
-    return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=cols)
 
 
 __all__ = ["solve_cycles_3d", "table_3d"]

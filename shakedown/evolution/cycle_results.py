@@ -14,6 +14,7 @@ import numpy as np
 
 from ..model.loading import LoadCycle
 from ..model.results import short_repr
+from .cone_tables import table_3d
 from .step_types import SEPARATED, STATE_NAMES
 
 #: A node *slips* in the steady orbit when its total slip while in contact exceeds
@@ -220,8 +221,6 @@ def _table(records):
     import pandas as pd
 
     if records and records[0].v.ndim == 3:  # a 3-D run: (points, N, 2) slips
-        from .cone_cycles import table_3d
-
         return table_3d(records)
 
     frames = []

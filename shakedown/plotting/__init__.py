@@ -6,7 +6,7 @@ Functions are re-exported lazily from the topic modules so that importing
 
 from importlib import import_module as _imp
 
-_TOPICS = ("bounds", "cycles", "stability", "sweep", "contact_patch")
+_TOPICS = ("bounds", "cycles", "cones", "stability", "sweep", "contact_patch")
 
 
 def __getattr__(name):

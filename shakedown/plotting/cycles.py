@@ -30,10 +30,10 @@ __all__ = [
 ]
 
 #: Display order (and colour index) of node-state labels; unknown labels are appended.
-STATE_ORDER = ("stick", "slip+", "forward", "slip-", "backward", "slip", "open", "separation")
+STATE_ORDER = ("stick", "slip", "slip+", "forward", "slip-", "backward", "open", "separation")
 _STATE_COLOURS = {
-    "stick": "#d9d9d9", "slip+": "#d62728", "forward": "#d62728", "slip-": "#1f77b4",
-    "backward": "#1f77b4", "slip": "#d62728", "open": "#2ca02c", "separation": "#2ca02c",
+    "stick": "#d9d9d9", "slip": "#d62728", "slip+": "#d62728", "forward": "#d62728", "slip-": "#1f77b4",
+    "backward": "#1f77b4", "open": "#2ca02c", "separation": "#2ca02c",
 }
 
 

@@ -10,7 +10,9 @@
   ``trajectory.png`` (v space) and ``trajectory_tau.png`` (tau = A v space); for a 3-D model
   with node positions (3-D FE bodies), ``node_states.png`` and the contact patch maps
   ``contact_patch.png`` (states and traction arrows at four instants), ``stuck_zone.png`` and
-  ``force_loop.png`` (:mod:`shakedown.plotting.contact_patch`) instead of ``steady_cycle.png``.
+  ``force_loop.png`` (:mod:`shakedown.plotting.contact_patch`) instead of ``steady_cycle.png``;
+  for any ``dim = 3`` system also ``cone_paths.png`` (per node, ``q / p`` over the steady cycle inside
+  the friction cone) and ``slip_trajectories.png`` (``(v_x, v_y)``).
 
 With ``n_initial_states > 1`` (or several ``initial_slips``) it also runs a uniqueness study
 (:func:`shakedown.uniqueness_study`) and writes ``uniqueness.csv`` and ``uniqueness.png``; the
@@ -45,19 +47,21 @@ OPTIONS = {
 }
 
 
-def _vector(name, value, n):
+def _vector(name, value, n, dim=2):
     try:
         v = np.array(value, dtype=float)
     except (TypeError, ValueError) as exc:
         raise SceneError(f"[analyses.cycles] key {name!r} must be numbers; got {value!r}") from exc
-    if v.shape != (n,):
+    if v.shape != ((n, 2) if dim == 3 else (n,)):
+        each = " (a pair [v_x, v_y] each: dim = 3)" if dim == 3 else ""
         raise SceneError(
-            f"[analyses.cycles] key {name!r} must list one slip per node ({n}); got {value!r}"
+            f"[analyses.cycles] key {name!r} must list one slip per node ({n}){each}; got "
+            f"{value!r}"
         )
     return v
 
 
-def _check(options, n):
+def _check(options, n, dim=2):
     if options["lam"] < 0:
         raise SceneError(f"[analyses.cycles] key 'lam' must be >= 0; got {options['lam']}")
     if options["method"] not in ("implicit", "events"):
@@ -69,10 +73,14 @@ def _check(options, n):
                      ("n_jobs", 0)):
         if options[key] < low:
             raise SceneError(f"[analyses.cycles] key {key!r} must be >= {low}; got {options[key]}")
-    v0 = _vector("initial_slip", options["initial_slip"], n) if options["initial_slip"] else None
+    if dim == 3 and options["method"] != "implicit":
+        raise SceneError("[analyses.cycles] key 'method' must be 'implicit' for dim = 3 (the "
+                         "event path is 2-D only)")
+    v0 = (_vector("initial_slip", options["initial_slip"], n, dim) if options["initial_slip"]
+          else None)
     states = None
     if options["initial_slips"]:
-        states = np.array([_vector("initial_slips", s, n) for s in options["initial_slips"]])
+        states = np.array([_vector("initial_slips", s, n, dim) for s in options["initial_slips"]])
     return v0, states
 
 
@@ -83,7 +91,8 @@ def run(ctx, options: dict) -> dict:
 
     system, load = ctx.system, ctx.load
     n = system.n_nodes
-    v0, states = _check(options, n)
+    dim = getattr(system, "dim", 2)
+    v0, states = _check(options, n, dim)
     lam = float(options["lam"])
     solver = dict(method=options["method"], steps_per_cycle=options["steps_per_cycle"],
                   tol=options["tol"])
@@ -100,7 +109,9 @@ def run(ctx, options: dict) -> dict:
                                "initial state", "run"), **solver,
         )
         ctx.output.write_table("uniqueness.csv", _from_one(study.table))
-        v0 = study.table[[f"initial_slip_{j}" for j in range(n)]].to_numpy(float)[0]
+        cols = ([f"initial_slip_{j}_{c}" for j in range(n) for c in "xy"] if dim == 3
+                else [f"initial_slip_{j}" for j in range(n)])
+        v0 = study.table[cols].to_numpy(float)[0].reshape((n, 2) if dim == 3 else (n,))
     sc = None
     if options["steady_solver"]:
         ctx.log("direct steady-cycle solver (fixed point of the period map)")
@@ -112,7 +123,8 @@ def run(ctx, options: dict) -> dict:
         with _CycleProgress(ctx, options["max_cycles"], desc, _units(ctx)["energy"]) as cb:
             run_ = solve_cycles(system, load, lam, initial_slip=v0,
                                 max_cycles=options["max_cycles"], progress=cb,
-                                record_history=n == 2 and options["plots"], **solver)
+                                record_history=n == 2 and dim == 2 and options["plots"],
+                                **solver)
     if run_ is not None and run_.status == "non_finite":  # overflow is a failure (issue 10)
         raise SolverError(f"[analyses.cycles] lam = {lam:g}: {run_.message}", partial=run_)
     summary = _summary(run_, lam, options, sc, study)
@@ -176,8 +188,9 @@ def _from_one(table):
     if "stuck" in t:
         t["stuck"] = [",".join(str(int(j) + 1) for j in str(x).split(",") if j.strip() != "")
                       for x in t["stuck"]]
-    pattern = re.compile(r"^(initial_slip|steady_slip|slip|gap)_(\d+)$")
-    return t.rename(columns=lambda c: pattern.sub(lambda m: f"{m[1]}_{int(m[2]) + 1}", c))
+    pattern = re.compile(r"^(initial_slip|steady_slip|slip|gap)_(\d+)(_[xy])?$")
+    return t.rename(columns=lambda c: pattern.sub(
+        lambda m: f"{m[1]}_{int(m[2]) + 1}{m[3] or ''}", c))
 
 
 def _dissipation_table(run):
@@ -259,20 +272,38 @@ def _plots(ctx, run, study, lam, options):
     ax.set_title(f"dissipation per cycle at lam = {lam:.4g}", fontsize=10)
     ctx.output.save_figure("dissipation.png", fig)
     has_steady = run.steady_table is not None and len(run.steady_table) > 0
-    if has_steady and getattr(ctx.system, "dim", 2) == 3:
+    maps = has_steady and getattr(ctx.system, "dim", 2) == 3 and _has_positions(ctx.model)
+    if maps:  # a 3-D body with node positions: maps of the contact patch
         _patch_plots(ctx, run, lam, units)
     elif has_steady:
         fig, axs = plt.subplots(2, 1, sharex=True, figsize=(6.4, 5.6))
-        plot_steady_cycle(run, axs, units=units)
+        src = run
+        if getattr(ctx.system, "dim", 2) == 3:  # magnitudes |v|, |q| of the 3-D columns
+            t = run.steady_table
+            src = t.assign(slip=np.hypot(t["slip_x"], t["slip_y"]), q=np.hypot(t["q_x"], t["q_y"]))
+        plot_steady_cycle(src, axs, units=units)
+        if src is not run:
+            axs[0].set_ylabel(f"|v| {units['length']}")
+            axs[1].set_ylabel(f"|q| (solid), p (dashed) {units['force']}")
         axs[0].set_title(f"steady cycle at lam = {lam:.4g}"
                          + axs[0].get_title()[len("steady cycle"):], fontsize=10)
         ctx.output.save_figure("steady_cycle.png", fig)
         fig, ax = plt.subplots(figsize=(6.4, 3.5))
-        plot_node_states(run, ax)
+        plot_node_states(src, ax)
         ctx.output.save_figure("node_states.png", fig)
     else:
         ctx.log("no steady cycle reached: steady_cycle.png and node_states.png not written")
-    if ctx.system.n_nodes == 2:
+    if getattr(ctx.system, "dim", 2) == 3 and has_steady and not maps:  # per-node cones (3-D)
+        from ...plotting.cones import plot_cone_paths, plot_slip_trajectories
+
+        axs = plot_cone_paths(run, ctx.system)
+        axs[0].figure.suptitle(f"tangential reaction q / p in the friction cone, lam = {lam:.4g}",
+                               fontsize=10, y=1.02)
+        ctx.output.save_figure("cone_paths.png", axs[0].figure)
+        fig, ax = plt.subplots(figsize=(5.5, 5))
+        plot_slip_trajectories(run, ax=ax, units=units)
+        ctx.output.save_figure("slip_trajectories.png", fig)
+    if ctx.system.n_nodes == 2 and getattr(ctx.system, "dim", 2) == 2:
         for space, name in (("v", "trajectory.png"), ("tau", "trajectory_tau.png")):
             fig, ax = plt.subplots(figsize=(5.5, 5))
             plot_trajectory(ctx.system, ctx.load, lam, run, ax, space=space, units=units)
@@ -284,12 +315,22 @@ def _plots(ctx, run, study, lam, options):
         ctx.output.save_figure("uniqueness.png", fig)
 
 
+def _has_positions(model) -> bool:
+    """The model gives node positions for contact patch maps (3-D FE bodies)."""
+    from ...plotting.contact_patch import patch_coordinates
+
+    try:
+        patch_coordinates(model)
+    except Exception:  # noqa: BLE001 - a 3-D system without node positions: no maps
+        return False
+    return True
+
+
 def _patch_plots(ctx, run, lam, units):
     """The 3-D steady cycle as maps of the contact patch (and the node-state image)."""
     import matplotlib.pyplot as plt
 
     from ...plotting.contact_patch import (
-        patch_coordinates,
         plot_force_loop,
         plot_patch_states,
         plot_stuck_zone,
@@ -302,11 +343,6 @@ def _patch_plots(ctx, run, lam, units):
     fig, ax = plt.subplots(figsize=(6.4, 4.5))
     plot_force_loop(run, lam, ax, units=units)
     ctx.output.save_figure("force_loop.png", fig)
-    try:
-        patch_coordinates(ctx.model)
-    except Exception:  # noqa: BLE001 - a 3-D system without node positions: no maps
-        ctx.log("the model has no node positions: contact patch maps not written")
-        return
     tab = run.steady_table
     qmax = float(np.hypot(tab["q_x"], tab["q_y"]).max()) or 1.0
     fig, axs = plt.subplots(2, 2, figsize=(9, 8.4), sharex=True, sharey=True)

@@ -21,8 +21,13 @@
     the bounds use it without densifying; with ``stiffness_file`` the stiffness is kept
     uncondensed (:func:`~shakedown.models.formats.uncondensed_stiffness`: the dense reduced
     stiffness is never formed, for thousands of contact nodes).
+    ``dim`` : 2 (default) or 3: two tangential slips per node (MODEL.md s.8); ``A`` is then
+    (2N x 2N) over ``v_1x, v_1y, v_2x, ...``, ``B`` (2N x N), ``C`` (N x N), a ``K`` (file or
+    ``K_file``) is 3N x 3N in the order ``v_1x, v_1y, ..., w_1, ...``, ``friction`` a number,
+    N numbers or N pairs ``[f_x, f_y]`` (elliptic cones); ``stiffness_file`` is 2-D only.
 ``[load]`` keys
-    ``q0``, ``p0`` : lists of N [force]; then either harmonics ``q_cos``, ``q_sin``, ``p_cos``,
+    ``q0``, ``p0`` : lists of N [force] (``dim = 3``: ``q0`` and the tangential harmonics /
+    samples are lists of N pairs ``[q_x, q_y]``); then either harmonics ``q_cos``, ``q_sin``, ``p_cos``,
     ``p_sin`` (lists of N or of lists of N) or samples ``q1``, ``p1`` (lists of lists of N);
     or ``file`` : an ``.npz`` / ``.mat`` with the same names; or
     ``record_file`` : a measured CSV record (columns ``t, q_1, p_1, ..., q_N, p_N``) with
@@ -59,7 +64,7 @@ from ...models.formats.readers import container_names, read_array
 STIFFNESS_KEYS = ("stiffness_file", "tangential_dofs", "normal_dofs", "fixed_dofs",
                   "tangential_sign", "normal_sign", "dof_base")
 MODEL_KEYS = ("A", "B", "C", "file", "K_file", "A_file", "B_file", "C_file", *STIFFNESS_KEYS,
-              "variables", "friction", "symmetry_rtol", "sparse")
+              "variables", "friction", "symmetry_rtol", "sparse", "dim")
 HARMONIC_KEYS = ("q_cos", "q_sin", "p_cos", "p_sin")
 SAMPLE_KEYS = ("q1", "p1")
 RECORD_KEYS = ("record_file", "period", "n_samples", "t_start", "max_error")
@@ -132,11 +137,13 @@ def _not_a_number(value):
     return None
 
 
-def _split(K, where: str) -> dict:
-    if len(K.shape) != 2 or K.shape[0] != K.shape[1] or K.shape[0] % 2:
-        raise SceneError(f"{where}: the reduced stiffness K must be square of even size 2N "
-                         f"(order v_1..v_N, w_1..w_N); got shape {K.shape}")
-    n = K.shape[0] // 2
+def _split(K, where: str, dim: int = 2) -> dict:
+    if len(K.shape) != 2 or K.shape[0] != K.shape[1] or K.shape[0] % dim:
+        size = "2N (order v_1..v_N, w_1..w_N)" if dim == 2 else (
+            "3N (order v_1x, v_1y, ..., v_Nx, v_Ny, w_1, ..., w_N)")
+        raise SceneError(f"{where}: the reduced stiffness K must be square of size {size}; "
+                         f"got shape {K.shape}")
+    n = K.shape[0] // dim * (dim - 1)  # the tangential unknowns: N (2-D) or 2N (3-D)
     # the DiscreteSystem's own symmetry tolerance (SYMMETRY_RTOL = 1e-8 of max|K|: room for
     # matrices written with 10 significant digits), checked here to name the file
     if sp.issparse(K):
@@ -150,8 +157,11 @@ def _split(K, where: str) -> dict:
     return {"A": K[:n, :n], "B": K[:n, n:], "C": K[n:, n:]}
 
 
-def _model_data(model: dict, scene_dir: Path):
+def _model_data(model: dict, scene_dir: Path, dim: int = 2):
     names = _variables(model)
+    if dim == 3 and "stiffness_file" in model:
+        raise SceneError("[model] 'stiffness_file' (condensation onto one tangential DOF per "
+                         "node) is 2-D only; for dim = 3 give A, B, C or file / K_file")
     sources = [k for k in ("file", "K_file", "stiffness_file") if k in model]
     if any(k in model for k in ("A_file", "B_file", "C_file")):
         sources.append("A_file/B_file/C_file")
@@ -167,10 +177,10 @@ def _model_data(model: dict, scene_dir: Path):
     if "file" in model:
         data.update(_container(scene_dir / str(model["file"]), "model", names))
         if "K" in data and "A" not in data:
-            data.update(_split(data.pop("K"), f"[model] file {model['file']!r}"))
+            data.update(_split(data.pop("K"), f"[model] file {model['file']!r}", dim))
     if "K_file" in model:
         K = read_matrix(scene_dir / str(model["K_file"]), names.get("K"), sparse=sparse)
-        data.update(_split(K, f"[model] K_file {model['K_file']!r}"))
+        data.update(_split(K, f"[model] K_file {model['K_file']!r}", dim))
     for key in ("A", "B", "C"):
         if f"{key}_file" in model:
             data[key] = read_matrix(scene_dir / str(model[f"{key}_file"]), names.get(key),
@@ -200,8 +210,12 @@ def build(model: dict, load: dict, scene_dir: Path):
                 f"allowed: {', '.join(MODEL_KEYS)}"
             )
     scene_dir = Path(scene_dir)
+    dim = model.get("dim", 2)
+    if isinstance(dim, bool) or dim not in (2, 3):
+        raise SceneError(f"[model] key 'dim' = {dim!r} must be 2 or 3 (tangential slips per "
+                         "node: one or two)")
     try:
-        data, condensed = _model_data(model, scene_dir)
+        data, condensed = _model_data(model, scene_dir, dim)
     except SceneError:
         raise
     except InputError as exc:
@@ -243,10 +257,12 @@ def build(model: dict, load: dict, scene_dir: Path):
                              "(relative asymmetry accepted, e.g. 1e-8)")
         kwargs["symmetry_rtol"] = float(tol)
     try:
-        system = DiscreteSystem(data["A"], data["B"], data["C"], data["friction"], **kwargs)
+        system = DiscreteSystem(data["A"], data["B"], data["C"], data["friction"], dim=dim,
+                                **kwargs)
     except InputError as exc:
         raise SceneError(f"[model] {exc}") from None
-    return system, build_load(load, scene_dir, system.n_nodes, condensed, names), condensed
+    return system, build_load(load, scene_dir, system.n_nodes, condensed, names,
+                              dim), condensed
 
 
 def _force(load: dict, key: str, scene_dir: Path, names: dict):
@@ -276,7 +292,8 @@ def _full_load(load: dict, scene_dir: Path, condensed, names: dict) -> LoadCycle
     return LoadCycle.from_harmonics(q0, p0, **kw)
 
 
-def build_load(load: dict, scene_dir: Path, n: int, condensed=None, names=None) -> LoadCycle:
+def build_load(load: dict, scene_dir: Path, n: int, condensed=None, names=None,
+               dim: int = 2) -> LoadCycle:
     for key in load:
         if key not in LOAD_KEYS:
             raise SceneError(
@@ -292,13 +309,17 @@ def build_load(load: dict, scene_dir: Path, n: int, condensed=None, names=None) 
         elif "record_file" in load:
             cycle = _record(load, Path(scene_dir))
         else:
-            cycle = _reactions(load, Path(scene_dir), n, names)
+            cycle = _reactions(load, Path(scene_dir), n, names, dim)
     except SceneError:
         raise
     except InputError as exc:
         raise SceneError(f"[load] {exc}") from None
     if cycle.n_nodes != n:
         raise SceneError(f"[load] gives {cycle.n_nodes} nodes but the model has {n} nodes")
+    if getattr(cycle, "dim", 2) != dim:
+        raise SceneError(f"[load] is {getattr(cycle, 'dim', 2)}-D but [model] has dim = {dim}: "
+                         + ("give q0 and the tangential harmonics as N pairs [q_x, q_y]"
+                            if dim == 3 else "give q0 as a list of N numbers"))
     return cycle
 
 
@@ -315,7 +336,7 @@ def _record(load: dict, scene_dir: Path) -> LoadCycle:
     return cycle
 
 
-def _reactions(load: dict, scene_dir: Path, n: int, names: dict) -> LoadCycle:
+def _reactions(load: dict, scene_dir: Path, n: int, names: dict, dim: int = 2) -> LoadCycle:
     if any(k in load for k in RECORD_KEYS):
         raise SceneError("[load] keys " + ", ".join(k for k in RECORD_KEYS if k in load)
                          + " need 'record_file'")
@@ -326,11 +347,14 @@ def _reactions(load: dict, scene_dir: Path, n: int, names: dict) -> LoadCycle:
         if key in load:
             data[key] = _array("load", key, load[key])
     for key in ("q0", "p0"):
+        want = (n, 2) if (dim == 3 and key == "q0") else (n,)
         if key not in data:
-            raise SceneError(f"[load] key {key!r} is missing (a list of {n} numbers)")
-        if data[key].shape != (n,):
+            raise SceneError(f"[load] key {key!r} is missing (a list of {n} "
+                             + ("pairs [q_x, q_y])" if len(want) == 2 else "numbers)"))
+        if data[key].shape != want:
             raise SceneError(
-                f"[load] key {key!r} must list one value per node ({n} nodes); got "
+                f"[load] key {key!r} must list one value per node ({n} nodes"
+                + (", each a pair [q_x, q_y]" if len(want) == 2 else "") + "); got "
                 f"{data[key].tolist()!r} (shape {data[key].shape})"
             )
     harm = [k for k in HARMONIC_KEYS if k in data]
