@@ -192,7 +192,7 @@ class CycleRun:
         return short_repr(self, ("lam", "method", "steps_per_cycle", "status", "period",
                                  "shook_down", "steady_dissipation", "n_cycles",
                                  "cycles_to_steady", "within_sampling_error"),
-                          {"n_nodes": int(np.size(self.final_slip)),
+                          {"n_nodes": int(np.shape(self.final_slip)[0]),
                            "n_stuck": int(np.size(self.stuck_nodes))})
 
     def verdict(self, energy: str = "[force x length]", study=None, bounds=None) -> str:

@@ -93,7 +93,7 @@ def cycles_verdict(run, lam: float, energy: str = "[force x length]", study=None
         if len(slip) > 12:
             which = f", {len(slip)} of {n} nodes slip ({_node_list(slip)})"
         elif slip:
-            which = f", {_node_list(slip)} slip"
+            which = f", {_node_list(slip)} slip{'s' * (len(slip) == 1)}"
         text = (f"{at}, cyclic slip: W = {sig(run.steady_dissipation)} {energy} per cycle, "
                 f"period {int(run.period)}{which}.")
     elif run.status == "not_converged":

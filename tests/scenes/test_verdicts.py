@@ -88,7 +88,7 @@ def test_a_stuck_node_is_not_listed_as_slipping(tmp_path):
     run = sd.solve_cycles(p.system, p.load, p.lam, steps_per_cycle=64, max_cycles=100)
     assert list(run.stuck_nodes) == [1]
     v = cycles_verdict(run, p.lam)
-    assert v.endswith("period 1, node 1 slip."), v
+    assert v.endswith("period 1, node 1 slips."), v
 
 
 def test_without_units_w_is_force_times_length(tmp_path, bounds):
