@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .provenance import costly_fallback
+
 #: Two load factors closer than this (relative) are reported as equal; the LP answers are
 #: accurate to HiGHS's feasibility tolerance 1e-7 (``engine.LAM_RTOL``).
 SAME_RTOL = 1e-7
@@ -161,4 +163,6 @@ def bounds_verdict(b, adjacency: bool = False) -> str:
         out.append(f"Above lam = {fmt(sep)} every safe state needs a tensile normal reaction at "
                    f"{_nodes(np.isin(np.arange(n), list(b.separation_nodes)))}: contact "
                    "would open there.")
+    if fallback := costly_fallback(getattr(b, "stages", ()), float(b.solve_time)):  # issue 26
+        out.append(fallback)
     return " ".join(out)
