@@ -46,7 +46,6 @@ FRICTIONS = (0.3, 0.6, 0.9)
 
 
 def build(kind, n, i):
-    import shakedown as sd
 
     if kind == "crack":
         import crack_networks as cn
