@@ -176,3 +176,24 @@ def test_stages_drive_the_progress_display():
     assert seen[1:] == ["lam2", "lam_low", "lam_high", "adjacency", "separation"]
     assert [s.stage for s in b.stages][:3] == ["lam2", "lam_low", "lam_high"]
     assert b.to_dict()["stages"][0]["stage"] == "lam2"
+
+
+def test_a_highs_lp_that_stops_without_an_answer_is_not_read_as_infeasible(monkeypatch):
+    """Issue 26: the 2000-crack lam2 LP hit HiGHS's time limit under load and the result said
+    "infeasible" (lam1 = lam2 = nan).  A time limit in a forced lam2 fallback now raises."""
+    from shakedown.bounds.lp import LPAnswer, ReusableLP
+    from shakedown.bounds.outcome import value
+    from shakedown.model.errors import SolverError
+
+    e = np.zeros(0)
+    stopped = LPAnswer("Time limit reached", np.nan, e, e, e, *(np.nan,) * 4, 12)
+    with pytest.raises(SolverError, match="Time limit reached"):
+        value(stopped)
+    assert np.isnan(value(dataclasses.replace(stopped, status="infeasible")))
+    system, load = _problem()
+    _force_lam2_failure(monkeypatch)
+    monkeypatch.setattr(ReusableLP, "solve", lambda self: stopped)
+    with pytest.raises(SolverError, match="time_limit"):
+        sd.shakedown_bounds(system, load)
+    with pytest.raises(SolverError):
+        sd.shakedown_bounds(system, load, solver="highs")
