@@ -94,8 +94,10 @@ def check_with_highs(b):
     A = np.hstack([ch.G, -ch.m[:, None]])
     x = np.r_[b.state_at_lam2 / sc.slip, lam2]
     slack = (ch.c - A @ x) / (np.linalg.norm(A, axis=1) * max(1.0, np.abs(x).max()))
-    T = np.argsort(slack)[: n + (0 if lam2 > 0 else 1)]
-    T = np.r_[T, 2 * n] if lam2 <= 0 else T
+    y = b.certificate
+    slack[y > 1e-12 * max(np.abs(y).max(initial=0.0), 1e-300)] = -1.0  # the certificate's rows
+    T = np.argsort(slack, kind="stable")[: n + 1 if lam2 > 0 else n]  # N + 1 rows in all
+    T = np.r_[T, 2 * n] if lam2 <= 0 else T  # lam = 0: the row -lam <= 0 is one of them
     model.start_from(np.sort(T))
     t = time.perf_counter()
     ans = model.run("max")
