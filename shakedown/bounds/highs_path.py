@@ -19,6 +19,8 @@ from .lp import LPAnswer, ReusableLP
 from .outcome import PathOutcome, lam1_from_intervals, separation_outcome, value
 
 RESIDUAL_NAMES = ("primal", "dual", "stationarity", "complementarity")
+#: HiGHS statuses that answer an LP (besides "unbounded..."); any other is solved again cold.
+DECIDED = ("optimal", "infeasible")
 
 #: On a sparse model, an optimal simplex answer whose certificate residual exceeds this is
 #: solved again by interior point + crossover.  HiGHS's tolerance is 1e-7 in its own scaling;
@@ -121,6 +123,13 @@ class HighsModel:
             for j in range(self.n):
                 lp.set_row_bounds(2 * self.n + j, -np.inf, self.sep_c[j])
         ans = lp.solve()
+        if ans.status not in DECIDED and not ans.status.startswith("unbounded") \
+                and "limit" not in ans.status.lower():
+            # HiGHS stopped undecided ("Unknown" after a warm start: test_auto_agrees_with_highs,
+            # formerly read as infeasible): once more from scratch; still undecided, or a time
+            # limit, and outcome.value raises SolverError
+            lp._h.clearSolver()
+            ans = lp.solve()
         if method == "simplex" and ans.status == "optimal" \
                 and ans.max_residual > self.resolve_above:
             lp._h.setOptionValue("solver", "ipm")
