@@ -50,7 +50,7 @@ def _primal_finish(A, b, e, tab, cap=None):
     return out if not out.singular and out.dual_feasible else None
 
 
-def solve_max(A, b, e, *, max_iter=80, interior=False):
+def solve_max(A, b, e, *, max_iter=80, interior=False, why=None):
     """``max e.x s.t. A x <= b``: interior point, basis identification, dual simplex clean-up.
 
     Returns ``(answer, tableau)`` with the tableau of the optimal basis (for warm starts), or
@@ -59,16 +59,24 @@ def solve_max(A, b, e, *, max_iter=80, interior=False):
     HiGHS.  ``interior=True``: where the crossover fails, ``(answer, None)`` with status
     ``"interior"``: the interior point's best iterate ``x`` and multipliers ``y`` (row scale
     of ``A``), not a vertex and not certified -- the caller checks what it needs (the
-    Chebyshev centre: :func:`~.engine.chebyshev_centre`).
+    Chebyshev centre: :func:`~.engine.chebyshev_centre`).  ``why``: a dict that, on failure,
+    receives ``"reason"`` (a short text) and ``"basis"`` (the best basis at hand, the rows the
+    interior point named, or ``None``) for the caller's fallback (:mod:`.dense_path`).
     """
     R, n = A.shape
     rn = np.linalg.norm(A, axis=1)
     rn[rn == 0] = 1.0
     As, bs = A / rn[:, None], b / rn
     x, s, z, status, it = ipm(As, bs, e, max_iter=max_iter)
+    if why is None:
+        why = {}
     if status == "failed":
+        why.update(reason="interior point failed (unbounded, infeasible or stalled)", basis=None)
         return None, None
     ans, tab = _crossover(A, b, e, As, s, z, it)
+    if ans is None:
+        why.update(reason="crossover from the interior point not certified",
+                   basis=identify_basis(As, z, s, n))
     if ans is None and interior:
         ans = DenseAnswer("interior", x, z / rn, np.zeros(0, int), it, (np.nan,) * 4)
     return ans, tab
@@ -88,7 +96,7 @@ def _crossover(A, b, e, As, s, z, it):
         # that the multipliers stay non-negative, then let the dual simplex finish
         T = complete_basis(As, z, s, e, n)
         if T is None:
-            return _clamped_finish(A, b, e, first, it)
+            return finish_from(A, b, e, first, it)
         tab = Tableau(A, b, e, T)
         ymax = max(float(np.abs(tab.y0).max()), np.finfo(float).tiny)
         if not tab.singular and tab.y0.min() >= -1e-6 * ymax:
@@ -98,37 +106,55 @@ def _crossover(A, b, e, As, s, z, it):
     if tab is not None and not tab.singular and not tab.dual_feasible:
         tab = _primal_finish(A, b, e, tab)
     if tab is None or tab.singular or not tab.dual_feasible:
-        return _clamped_finish(A, b, e, first, it)
+        return finish_from(A, b, e, first, it)
     ans = batch_dual_simplex(tab, [()])[0]
     if ans.status != "optimal":
-        return _clamped_finish(A, b, e, first, it)
+        return finish_from(A, b, e, first, it)
     if ans.iterations:
         tab = Tableau(A, b, e, ans.basis)
     ans = DenseAnswer(ans.status, ans.x, ans.y, ans.basis, ans.iterations + it, ans.residuals)
     return ans, tab
 
 
-def _clamped_finish(A, b, e, tab, it):
-    """Last resort of :func:`solve_max` (issue 14: a 2000-crack network whose stalled interior
-    point names a basis that is neither primal feasible nor dual feasible, multipliers down to
-    ``-8e-7``): multipliers that are zero up to the interior point's accuracy (``1e-4`` of the
-    largest) are set to 0 and
-    the dual simplex (:func:`~.single_simplex.single_dual_simplex`, which recomputes ``x`` and
-    ``y`` of its final basis from scratch) finishes; the answer counts only if certified by its
-    own optimality conditions, else ``(None, None)`` (HiGHS)."""
+def finish_from(A, b, e, tab, it=0):
+    """An optimal basis from any non-singular start ``tab``: clamp the multipliers, dual
+    simplex, primal finish (last resort of :func:`solve_max`; also HiGHS's basis in
+    :mod:`.dense_path` when its multipliers are not non-negative to our tolerance).
+
+    Issue 14: a 2000-crack network whose stalled interior point names a basis that is neither
+    primal nor dual feasible.  Issue 26 (``sample_crack_set(2000, density=0.1, rng=77)``): the
+    interior point stalls at merit ``~1e-7`` (the normal matrix's diagonal spans ``1e13`` to
+    ``1e22``, the barely active rows' multipliers ``~1e-8`` against slacks ``~1e-4``), so the
+    identified basis has 8 multipliers down to ``-5.8e-4`` of the largest and 12 violated rows.
+    The negative multipliers are set to 0 (a cost perturbation: the start is dual feasible for
+    a nearby objective), the dual simplex
+    (:func:`~.single_simplex.single_dual_simplex`, which recomputes ``x`` and ``y`` of its
+    final basis from scratch) reaches a primal feasible basis, and where that basis is not
+    dual feasible for the true objective (there: 2 multipliers of ``-1.3e-7``) the primal
+    simplex (:func:`_primal_finish`) ends at the optimum.  Formerly multipliers below
+    ``-1e-4`` of the largest were refused and the primal finish was not tried after the dual
+    simplex: the LP went to HiGHS and with it every LP of the computation (37 min instead of
+    one).  The answer counts only if certified by its own optimality conditions, else
+    ``(None, None)``."""
     from .single_simplex import single_dual_simplex
 
     if tab is None or tab.singular:
         return None, None
-    ymax = max(float(np.abs(tab.y0).max()), np.finfo(float).tiny)
-    if not tab.y0.min() >= -1e-4 * ymax:  # (a start only: the answer is certified)
-        return None, None
-    tab.y0 = np.maximum(tab.y0, 0.0)
+    tab.y0 = np.maximum(tab.y0, 0.0)  # (a start only: the answer is certified)
     ans = single_dual_simplex(tab)
-    if ans.status != "optimal":
+    pivots = ans.iterations
+    tab = Tableau(A, b, e, np.sort(ans.basis))
+    if tab.singular:
         return None, None
-    tab = Tableau(A, b, e, ans.basis)
-    if tab.singular or not tab.dual_feasible:
+    if ans.status != "optimal" and not tab.dual_feasible:
+        tab = _primal_finish(A, b, e, tab)  # None unless a feasible vertex (FacetWalk checks)
+        if tab is None:
+            return None, None
+        ans = batch_dual_simplex(tab, [()])[0]  # certify (0 pivots at an optimum)
+        pivots += ans.iterations
+        if ans.iterations:
+            tab = Tableau(A, b, e, ans.basis)
+    if ans.status != "optimal" or tab.singular or not tab.dual_feasible:
         return None, None
-    ans = DenseAnswer(ans.status, ans.x, ans.y, ans.basis, ans.iterations + it, ans.residuals)
+    ans = DenseAnswer(ans.status, ans.x, ans.y, ans.basis, pivots + it, ans.residuals)
     return ans, tab

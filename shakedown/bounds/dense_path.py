@@ -25,19 +25,25 @@ from .constraints import ConstraintSet
 from .highs_path import RESIDUAL_NAMES, HighsModel
 from .lp import LPAnswer
 from .outcome import PathOutcome, lam1_from_intervals, separation_outcome, value
+from .provenance import StageLog
 from .pruning import lam_high_pruned
 from .result import LAM_RTOL
 
+#: Why the ``min lam`` LPs go to HiGHS when they do.
+NO_MIN_START = "no dual-feasible start for min lam"
+
 
 class _Book:
-    """Counts LPs and iterations, keeps the worst residuals, builds HiGHS only if needed."""
+    """Counts LPs and iterations, keeps the worst residuals, builds HiGHS only if needed, and
+    records per stage which path answered (:class:`~.provenance.StageLog`)."""
 
-    def __init__(self, cs):
+    def __init__(self, cs, log=None):
         self.cs = cs
         self.worst = dict.fromkeys(RESIDUAL_NAMES, 0.0)
         self.lps = 0
         self.iters = 0
         self._highs = None
+        self.log = log if log is not None else StageLog()
 
     def record(self, ans):
         self.lps += 1
@@ -45,15 +51,24 @@ class _Book:
         if ans.status == "optimal":
             for k, r in zip(RESIDUAL_NAMES, ans.residuals, strict=True):
                 self.worst[k] = max(self.worst[k], r)
+        if ans.status in ("optimal", "infeasible"):
+            self.log.dense()
 
-    def highs(self, sense, tight=(), separation=False):
+    def model(self):
+        """The HiGHS model (built on first use)."""
         if self._highs is None:
             self._highs = HighsModel(self.cs)
-        ans = self._highs.run(sense, tight=tight, separation=separation)
+            self._highs.log = self.log
+        return self._highs
+
+    def highs(self, sense, tight=(), separation=False, reason="dense answer not certified"):
+        """One LP by HiGHS in place of the dense path (a fallback, counted with ``reason``)."""
+        model = self.model()
+        ans = model.run(sense, tight=tight, separation=separation, reason=reason)
         self.lps += 1
         self.iters += ans.iterations
         for k in RESIDUAL_NAMES:
-            self.worst[k] = max(self.worst[k], self._highs.worst[k])
+            self.worst[k] = max(self.worst[k], model.worst[k])
         return ans
 
 
@@ -108,40 +123,55 @@ def _share(ans, g, groups, by_row, out, done, sense, lam_row):
 
 
 def solve_dense(cs: ConstraintSet, intervals: bool, adjacency: bool,
-                separation: bool) -> PathOutcome | None:
-    """Dense path; ``None`` when the ``lam2`` LP is not a certified optimum (unbounded,
-    infeasible or numerical trouble): the caller then uses :func:`~.highs_path.solve_highs`."""
+                separation: bool, log: StageLog | None = None) -> PathOutcome | None:
+    """Dense path; ``None`` when the ``lam2`` LP has no optimum (unbounded or infeasible) or
+    its optimal basis cannot be certified in the dense coordinates: the caller then uses
+    :func:`~.highs_path.solve_highs`.
+
+    An LP that the dense path cannot certify is re-solved by HiGHS, that LP alone (issue 26):
+    for the ``lam2`` LP from the best basis at hand, and its optimal basis comes back here, so
+    the intervals, walks and pruning go on in the coordinates of the ``lam2`` basis.  ``log``
+    (:class:`~.provenance.StageLog`) records the path of each stage."""
     n = cs.n_nodes
     A = np.vstack([np.hstack([cs.G, -cs.m[:, None]]), np.r_[np.zeros(n), -1.0][None, :]])
     b = np.r_[cs.c, 0.0]
     e = np.r_[np.zeros(n), 1.0]
-    main, tab = dense_lp.solve_max(A, b, e)
+    book = _Book(cs, log)
+    book.log.start("lam2")
+    why = {}
+    main, tab = dense_lp.solve_max(A, b, e, why=why)
     if main is None:
-        return None
-    book = _Book(cs)
-    book.record(main)
+        main, tab = _lam2_by_highs(A, b, e, book, why)
+        if main is None:
+            return None
+    else:
+        book.record(main)
     lam2 = float(main.x[-1])
     out = PathOutcome(lam1=np.nan, lam2=lam2, status="bounded", messages=[],
                       lam_low=np.full(2 * n, np.nan), lam_high=np.full(2 * n, np.nan),
                       v_at_lam2=main.x[:n].copy(), certificate=main.y[: 2 * n].copy())
     lamrow = 2 * n
+    if intervals or adjacency:
+        book.log.start("lam_low")
     tab0 = _min_start(A, b, e, tab, lamrow, book) if (intervals or adjacency) else None
     frame = _Frame(cs, main)
     if intervals:
         _intervals(cs, A, b, e, tab, tab0, main, book, out, exact_all=intervals == "all",
                    frame=frame)
     if adjacency:
+        book.log.start("adjacency")
         pairs = [(j, n + j) for j in range(n)]
         if tab0 is not None:
             adj = _family(tab0, pairs, "min", book, lamrow)
         else:
-            adj = np.array([value(book.highs("min", t)) for t in pairs])
+            adj = np.array([value(book.highs("min", t, reason=NO_MIN_START)) for t in pairs])
         adj = np.where(np.isnan(adj), np.inf, np.maximum(adj, 0.0))
         out.lam_adj = np.inf
         if np.isfinite(adj).any():
             out.adj_node = int(np.argmin(adj))
             out.lam_adj = float(adj[out.adj_node])
     if separation:
+        book.log.start("separation")
         v2 = out.v_at_lam2
         sep = cs.sep_G @ v2 - cs.sep_c - lam2 * cs.sep_m
         scale = np.abs(cs.sep_G).max(initial=0.0) * np.abs(v2).max(initial=0.0) + np.abs(cs.sep_c)
@@ -150,8 +180,40 @@ def solve_dense(cs: ConstraintSet, intervals: bool, adjacency: bool,
         else:
             out.lam_sep, out.sep_nodes = separation_outcome(
                 _separation(cs, frame, book), lam2, n)
+    book.log.stop()
+    out.stages = book.log.records()
     out.residuals, out.n_lps, out.iterations = book.worst, book.lps, book.iters
     return out
+
+
+def _lam2_by_highs(A, b, e, book, why):
+    """The ``lam2`` LP by HiGHS when the dense solve was not certified (``why``: its reason
+    and best basis, see :func:`~.dense_lp.solve_max`), started from that basis; HiGHS's optimal
+    basis is then certified here as a dense tableau, so everything after it runs on the dense
+    path as usual.  ``(None, None)``: no optimum (unbounded or infeasible: the HiGHS path
+    reports which) or a basis the dense coordinates cannot certify."""
+    model = book.model()
+    if why.get("basis") is not None:
+        model.start_from(why["basis"])
+    ans = book.highs("max", reason=why.get("reason", "not certified"))
+    if ans.status != "optimal":
+        value(ans)  # SolverError unless unbounded or infeasible (the HiGHS path says which)
+        return None, None
+    book.log.handover = "HiGHS's optimal lam2 basis not certified in the dense coordinates"
+    T = model.tight_basis()
+    tab = dense_lp.Tableau(A, b, e, T) if T is not None else None
+    if tab is None or tab.singular:
+        return None, None
+    if not tab.dual_feasible:  # (multipliers of HiGHS's tolerance, not ours)
+        main, tab = dense_lp.finish_from(A, b, e, tab)
+    else:
+        main = dense_lp.batch_dual_simplex(tab, [()])[0]  # certify (no pivot at an optimum)
+        if main.iterations:
+            tab = dense_lp.Tableau(A, b, e, main.basis)
+    if main is None or main.status != "optimal" or tab.singular:
+        return None, None
+    book.log.handover = None
+    return main, tab
 
 
 class _Frame:
@@ -179,7 +241,8 @@ def _separation(cs, frame, book):
             R = len(cs.c)
             return LPAnswer("optimal", float(ans.x[-1]), ans.x, ans.y[: R + cs.n_nodes],
                             np.zeros(len(ans.x)), *ans.residuals, ans.iterations)
-    return book.highs("max", separation=True)
+    return book.highs("max", separation=True,
+                      reason="no-separation LP not certified in the lam2 basis coordinates")
 
 
 def _intervals(cs, A, b, e, tab, tab0, main, book, out, exact_all, frame):
@@ -196,12 +259,14 @@ def _intervals(cs, A, b, e, tab, tab0, main, book, out, exact_all, frame):
         out.lam_low[:] = lo
         tol = LAM_RTOL * max(1.0, lam2)  # as lam1_from_intervals reads "active at 0"
         if np.all(lo <= tol):  # (False for nan: never active)
+            book.log.start("lam_high")
             hi[:], out.hi_exact = lam_high_pruned(cs, A, b, tab, main, book, frame.get())
             out.lam1, out.limiting = lam1_from_intervals(
                 cs.labels(), out.lam_low, np.where(out.hi_exact, hi, np.inf), lam2,
                 out.messages)
             return
         # some constraint is not active at lam = 0 (lam1 = 0): every interval exactly
+    book.log.start("lam_high")
     hi[main.basis[main.basis < lamrow]] = lam2  # tight at the lam2 optimum
     rest = [k for k in range(2 * n) if np.isnan(hi[k])]
     hi[rest] = _family(tab, [(k,) for k in rest], "max", book, lamrow)
@@ -209,6 +274,7 @@ def _intervals(cs, A, b, e, tab, tab0, main, book, out, exact_all, frame):
     hi[fin] = np.minimum(hi[fin], lam2)
     act = [k for k in range(2 * n) if np.isfinite(hi[k])]
     lo = np.full(2 * n, np.nan)
+    book.log.start("lam_low")
     lo[act] = _lows(tab0, act, book, lamrow)
     out.lam_low[:] = lo
     out.hi_exact = np.ones(2 * n, bool)
@@ -221,7 +287,7 @@ def _lows(tab0, rows, book, lamrow):
     if tab0 is not None:
         lo = _family(tab0, [(k,) for k in rows], "min", book, lamrow)
     else:
-        lo = np.array([value(book.highs("min", (k,))) for k in rows])
+        lo = np.array([value(book.highs("min", (k,), reason=NO_MIN_START)) for k in rows])
     return np.where(np.isnan(lo), lo, np.maximum(lo, 0.0))
 
 

@@ -43,6 +43,7 @@ from .dense_path import solve_dense
 from .highs_path import solve_highs
 from .lp import INF, ReusableLP
 from .outcome import intervals_option as _intervals_option
+from .provenance import StageLog
 from .result import LAM_RTOL, ShakedownBounds
 
 #: What ``only=`` may name.
@@ -60,6 +61,7 @@ def shakedown_bounds(
     only=None,
     solver: str = "auto",
     facets: int | None = None,
+    progress=None,
 ) -> ShakedownBounds:
     """Shakedown load factors ``lam1 <= lam2`` with certificates (MODEL.md s.3).
 
@@ -106,6 +108,10 @@ def shakedown_bounds(
         system (:class:`~shakedown.model.uncondensed.UncondensedSystem`) has dense constraint
         rows ``A -/+ F B^T`` (a Schur complement): they are formed by ``N`` sparse solves (never
         all of ``K``) and take the dense path.
+    progress : callable, optional
+        ``progress(iterable, total=None, desc="")`` (:class:`~shakedown.model.progress.
+        ProgressDisplay`, ``tqdm.tqdm``): one step per stage (``lam2`` LP, ``lam_low``,
+        ``lam_high``, adjacency, no-separation).  ``None``: nothing shown.
 
     A three-dimensional system (``system.dim == 3``) goes to the cone engine
     (:func:`shakedown.bounds.cones.engine.cone_bounds`, MODEL.md s.8.3): ``lam2`` on the
@@ -153,14 +159,27 @@ def shakedown_bounds(
     sc = Scales.of(cs)
     ch = sc.nondimensional(cs)
     out = None
-    if solver == "auto" and not sp.issparse(cs.G):
-        out = solve_dense(ch, intervals, adjacency, separation)
+    log = StageLog(progress)
+    dense = solver == "auto" and not sp.issparse(cs.G)
+    if dense:
+        out = solve_dense(ch, intervals, adjacency, separation, log=log)
     if out is None:
-        out = solve_highs(ch, load.has_periodic_part, intervals, adjacency, separation)
+        tried = log.records()[:1] if dense else ()
+        # log.handover: an optimal lam2 basis the dense path could not certify (its LPs then
+        # count as fallbacks); None: no optimum (unbounded, infeasible) or no dense attempt
+        out = solve_highs(ch, load.has_periodic_part, intervals, adjacency, separation,
+                          log=StageLog() if dense else log, reason=log.handover)
+        out.stages = tuple(tried) + tuple(out.stages)  # the dense attempt, then the HiGHS path
+    log.finish()
     lf = sc.load_factor
     lam1, lam2 = out.lam1 * lf, out.lam2 * lf
     lam_sep = out.lam_sep * lf
     messages = list(out.messages)
+    fallbacks = sum(st.fallbacks for st in out.stages)
+    if fallbacks:
+        where = ", ".join(f"{st.stage}: {st.fallbacks}" for st in out.stages if st.fallbacks)
+        messages.append(f"{fallbacks} LP(s) re-solved by HiGHS (not certified by the dense "
+                        f"path): {where}")
     if out.sep_nodes:
         messages.append(
             f"above lam = {lam_sep:.6g} every safe state needs a tensile normal reaction "
@@ -198,6 +217,7 @@ def shakedown_bounds(
         simplex_iterations=int(out.iterations),
         solve_time=time.perf_counter() - t0,
         constraints=cs,
+        stages=tuple(out.stages),
     )
 
 

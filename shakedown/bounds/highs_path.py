@@ -7,6 +7,9 @@ HiGHS's absolute tolerances (1e-7) are relative to the problem's own scales.
 
 from __future__ import annotations
 
+import time
+
+import highspy
 import numpy as np
 import scipy.sparse as sp
 
@@ -16,6 +19,8 @@ from .lp import LPAnswer, ReusableLP
 from .outcome import PathOutcome, lam1_from_intervals, separation_outcome, value
 
 RESIDUAL_NAMES = ("primal", "dual", "stationarity", "complementarity")
+#: HiGHS statuses that answer an LP (besides "unbounded..."); any other is solved again cold.
+DECIDED = ("optimal", "infeasible")
 
 #: On a sparse model, an optimal simplex answer whose certificate residual exceeds this is
 #: solved again by interior point + crossover.  HiGHS's tolerance is 1e-7 in its own scaling;
@@ -53,13 +58,59 @@ class HighsModel:
         # certificate is loose is solved again by interior point + crossover
         self.resolve_above = RESOLVE_RESIDUAL if sp.issparse(rows) else np.inf
         self.resolved = 0
+        self.log = None  # a provenance.StageLog: each run is counted in it
+        self.reason = None  # why these LPs are not solved by the dense path (None: by choice)
+
+    def tight_basis(self):
+        """The last optimal basis as rows of the dense path's LP (:mod:`.dense_path`: rows
+        ``0..2N-1`` the constraints, ``2N`` the row ``-lam <= 0``): the rows HiGHS holds at a
+        bound, sorted; ``None`` when that is not ``N + 1`` rows (a free column non-basic)."""
+        n = self.n
+        bas = self.lp._h.getBasis()
+        if not bas.valid:
+            return None
+        basic = highspy.HighsBasisStatus.kBasic
+        T = [i for i, st in enumerate(bas.row_status[: 2 * n]) if st != basic]
+        if bas.col_status[n] != basic:
+            T.append(2 * n)
+        if len(T) != n + 1 or any(st != basic for st in bas.col_status[:n]):
+            return None
+        return np.asarray(T, int)
+
+    def start_from(self, T) -> bool:
+        """Give HiGHS the start basis ``T`` (rows of the dense path's LP, see
+        :meth:`tight_basis`, ``N + 1`` of them): those rows at their bound, every other row and
+        every ``v`` column basic.  ``False`` if HiGHS refuses it (the solve then starts as
+        before)."""
+        n = self.n
+        T = np.asarray(T, int)
+        if len(T) != n + 1:
+            return False
+        st = highspy.HighsBasisStatus
+        rows = [st.kBasic] * self.lp.n_rows
+        for i in T[T < 2 * n]:
+            rows[int(i)] = st.kUpper
+        basis = highspy.HighsBasis()
+        basis.col_status = [st.kBasic] * n + [st.kLower if 2 * n in T else st.kBasic]
+        basis.row_status = rows
+        basis.valid = True
+        basis.alien = False
+        return self.lp._h.setBasis(basis) == highspy.HighsStatus.kOk
 
     def run(self, sense: str, tight=(), separation: bool = False, cost=None,
-            method: str = "simplex") -> LPAnswer:
+            method: str = "simplex", reason: str | None = None) -> LPAnswer:
         """Optimise ``lam`` (or ``cost . (v, lam)``) with rows ``tight`` held tight.
 
         ``method="ipm"``: HiGHS's interior point with crossover (a basis for the next warm
-        starts), for a cold start on a large sparse model."""
+        starts), for a cold start on a large sparse model.  ``reason``: why the dense path
+        handed this LP over (recorded in ``log``; ``None``: no dense attempt)."""
+        t0 = time.perf_counter()
+        ans = self._run(sense, tight, separation, cost, method)
+        if self.log is not None:
+            self.log.highs(time.perf_counter() - t0, reason or self.reason)
+        return ans
+
+    def _run(self, sense, tight, separation, cost, method):
         lp = self.lp
         if method != "simplex":
             lp._h.setOptionValue("solver", method)
@@ -73,6 +124,13 @@ class HighsModel:
             for j in range(len(self.sep_c)):
                 lp.set_row_bounds(self.R + j, -np.inf, self.sep_c[j])
         ans = lp.solve()
+        if ans.status not in DECIDED and not ans.status.startswith("unbounded") \
+                and "limit" not in ans.status.lower():
+            # HiGHS stopped undecided ("Unknown" after a warm start: test_auto_agrees_with_highs,
+            # formerly read as infeasible): once more from scratch; still undecided, or a time
+            # limit, and outcome.value raises SolverError
+            lp._h.clearSolver()
+            ans = lp.solve()
         if method == "simplex" and ans.status == "optimal" \
                 and ans.max_residual > self.resolve_above:
             lp._h.setOptionValue("solver", "ipm")
@@ -100,16 +158,23 @@ class HighsModel:
 
 
 def solve_highs(cs: ConstraintSet, has_periodic_part: bool, intervals, adjacency: bool,
-                separation: bool) -> PathOutcome:
+                separation: bool, log=None, reason=None) -> PathOutcome:
     """Every LP by HiGHS (the reference path); ``cs`` nondimensional.
 
     On a dense constraint set (the reference path) every interval is computed exactly.  On a
     sparse one, ``intervals="lam1"`` computes the intervals ``lam1`` needs (family points,
     capped LPs sharing their tight rows, incumbent pruning: :mod:`.highs_pruning`); ``"all"`` /
-    ``True``: every interval exactly."""
+    ``True``: every interval exactly.  ``log``: a :class:`~.provenance.StageLog` (stages and
+    LP counts); ``reason``: why the dense path did not run (its LPs then count as fallbacks)."""
     n = cs.n_nodes
     R = len(cs.c)  # 2N in 2-D
     eng = HighsModel(cs)
+    if log is None:
+        from .provenance import StageLog
+
+        log = StageLog()
+    eng.log, eng.reason = log, reason
+    log.start("lam2")
     scale_m = np.abs(cs.m).max(initial=0.0)
     messages = []
 
@@ -146,8 +211,11 @@ def solve_highs(cs: ConstraintSet, has_periodic_part: bool, intervals, adjacency
                       v_at_lam2=v_at_lam2, certificate=certificate)
     sep_answer = None
     if sparse and separation and status != "infeasible":  # next to the lam2 basis: cheap
+        log.start("separation")
         sep_answer = eng.run("max", separation=True)
     pruned = None
+    if intervals and status != "infeasible":
+        log.start("lam_high")
     if intervals == "lam1" and sparse and status == "bounded" and main.status == "optimal":
         pruned = intervals_pruned(eng, cs, lam2, v_at_lam2)
     if pruned is not None:
@@ -165,6 +233,7 @@ def solve_highs(cs: ConstraintSet, has_periodic_part: bool, intervals, adjacency
                 out.lam_high[k] = lam2
             else:
                 out.lam_high[k] = value(eng.run("max", tight=(k,)))
+        log.start("lam_low")
         for k in range(R):
             if np.isnan(out.lam_high[k]):
                 continue  # never active
@@ -173,6 +242,7 @@ def solve_highs(cs: ConstraintSet, has_periodic_part: bool, intervals, adjacency
         out.lam1, out.limiting = lam1_from_intervals(cs.labels(), out.lam_low, out.lam_high, lam2,
                                                      messages)
     if adjacency and status != "infeasible":
+        log.start("adjacency")
         out.lam_adj = np.inf
         for j, pair in enumerate(cs.adjacency_pairs()):  # 2-D: (I_j, II_j)
             a = value(eng.run("min", tight=tuple(int(k) for k in pair)))
@@ -180,8 +250,11 @@ def solve_highs(cs: ConstraintSet, has_periodic_part: bool, intervals, adjacency
                 out.lam_adj, out.adj_node = a, j
     if separation and status != "infeasible":
         if sep_answer is None:
+            log.start("separation")
             sep_answer = eng.run("max", separation=True)
         out.lam_sep, out.sep_nodes = separation_outcome(sep_answer, lam2, n, rows=R)
+    log.stop()
+    out.stages = log.records()
     out.residuals = dict(eng.worst)
     out.n_lps = eng.lp.n_solves
     out.iterations = eng.lp.total_iterations

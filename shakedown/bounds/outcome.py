@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..model.errors import InputError
+from ..model.errors import SolverError
 from .lp import LPAnswer
 from .result import LAM_RTOL
 
@@ -38,15 +39,27 @@ class PathOutcome:
     residuals: dict = field(default_factory=dict)
     n_lps: int = 0
     iterations: int = 0
+    stages: tuple = ()  # provenance.StageRecord per stage
 
 
 def value(ans: LPAnswer) -> float:
-    """The ``lam`` column of a HiGHS answer (``+-inf`` unbounded, ``nan`` infeasible)."""
+    """The ``lam`` column of a HiGHS answer (``+-inf`` unbounded, ``nan`` infeasible).
+
+    Raises
+    ------
+    SolverError
+        Any other status (time limit, numerical trouble): formerly read as "infeasible", which
+        turned a 2000-crack ``lam2`` LP that hit HiGHS's time limit into ``status =
+        "infeasible"`` (issue 26)."""
     if ans.status == "optimal":
         return float(ans.x[-1])
     if ans.status.startswith("unbounded"):
         return np.inf if ans.objective > 0 else -np.inf
-    return np.nan
+    if ans.status == "infeasible":
+        return np.nan
+    raise SolverError(f"HiGHS stopped with status {ans.status!r} after {ans.iterations} "
+                      "iterations: no answer to report (raise ReusableLP's time_limit, or "
+                      "check the model's scales)")
 
 
 def lam1_from_intervals(labels, lam_low, lam_high, lam2, messages):

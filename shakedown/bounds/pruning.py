@@ -364,5 +364,6 @@ def lam_high_pruned(cs, A, b, tab, main, book, frame=False):
     """
     p = _Pruner(cs, A, b, tab, main, book, frame)
     p.run()
+    book.log.walked(int(np.count_nonzero(~p.exact)))  # decided by walks and shared vertices
     hi = np.where(p.exact, p.hi, p.lower)
     return np.minimum(hi, p.lam2), p.exact.copy()

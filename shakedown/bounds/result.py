@@ -75,6 +75,9 @@ class ShakedownBounds:
     solve_time : float
         Seconds.
     constraints : ConstraintSet
+    stages : tuple of StageRecord
+        Which path each stage took (dense, walk, HiGHS re-solve), how many LPs fell back to
+        HiGHS and why, and the seconds of each (:mod:`shakedown.bounds.provenance`).
     """
 
     lam1: float
@@ -99,6 +102,7 @@ class ShakedownBounds:
     simplex_iterations: int
     solve_time: float
     constraints: ConstraintSet = field(repr=False)
+    stages: tuple = field(default=(), repr=False)
 
     @property
     def n_nodes(self) -> int:
@@ -178,6 +182,7 @@ class ShakedownBounds:
             "simplex_iterations": int(self.simplex_iterations),
             "solve_time_s": float(self.solve_time),
             "n_nodes": int(self.n_nodes),
+            "stages": [s.to_dict() for s in self.stages],
         }
 
     def __repr__(self) -> str:

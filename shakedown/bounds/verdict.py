@@ -14,6 +14,7 @@ import numpy as np
 
 from ..model.numbers import sig
 from ..model.results import bounds_claim
+from .provenance import costly_fallback
 
 #: Two load factors closer than this (relative) are reported as equal; the LP answers are
 #: accurate to HiGHS's feasibility tolerance 1e-7 (``engine.LAM_RTOL``).
@@ -168,4 +169,6 @@ def bounds_verdict(b, adjacency: bool = False) -> str:
         out.append(f"Above lam = {fmt(sep)} every safe state needs a tensile normal reaction at "
                    f"{_nodes(np.isin(np.arange(n), list(b.separation_nodes)))}: contact "
                    "would open there.")
+    if fallback := costly_fallback(getattr(b, "stages", ()), float(b.solve_time)):  # issue 26
+        out.append(fallback)
     return " ".join(out)

@@ -50,11 +50,18 @@ def _table(b):
     return t
 
 
+#: Nodes from which the bounds show their stages on the progress display (about 2 s for a
+#: 300-crack network, one core).
+PROGRESS_NODES = 300
+
+
 def run(ctx, options: dict) -> dict:
     lam = options["lam"]
     b = shakedown_bounds(
         ctx.system, ctx.load, lam=None if lam < 0 else lam, adjacency=options["adjacency"],
         intervals=True if options["exact_intervals"] else "lam1",
+        # a progress line per stage where the bounds take more than a few seconds (issue 26)
+        progress=ctx.progress if ctx.system.n_nodes >= PROGRESS_NODES else None,
     )
     verdict = bounds_verdict(b, adjacency=options["adjacency"])
     d = _node_numbers(b, b.to_dict())

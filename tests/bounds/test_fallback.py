@@ -1,0 +1,199 @@
+"""Issue 26: an LP the dense path cannot certify falls back alone, and the result says so.
+
+* A forced failure of the dense ``lam2`` LP: HiGHS solves that LP, its optimal basis comes back
+  to the dense machinery, and every other LP stays on the dense path; the answer is the same
+  as without the failure (and as HiGHS's reference path).
+* The crossover's last resort (:func:`~shakedown.bounds.dense_lp.finish_from`) from a wrong
+  basis ends at HiGHS's optimum, certified.
+* The records (``stages``), the verdict's sentence on a costly fallback, the progress display.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from test_basis_lp import _tensile_problem
+from test_lp import highs_max, random_lp
+
+import shakedown as sd
+from shakedown import dense_lp
+from shakedown.bounds import dense_path, highs_path
+from shakedown.bounds.provenance import StageRecord, costly_fallback
+
+
+def _problem():
+    return _tensile_problem(40, 3)
+
+
+def _force_lam2_failure(monkeypatch):
+    """The dense lam2 LP fails (as the interior point's crossover did in issue 26); every
+    HiGHS LP is counted."""
+    real = dense_lp.solve_max
+    calls = {"highs": [], "lam2": 0}
+
+    def failing(A, b, e, *, why=None, **kw):
+        if kw.get("interior"):  # the Chebyshev centre: not the lam2 LP
+            return real(A, b, e, why=why, **kw)
+        calls["lam2"] += 1
+        if why is not None:
+            why.update(reason="forced failure", basis=None)
+        return None, None
+
+    run = highs_path.HighsModel.run
+
+    def counted(self, sense, tight=(), separation=False, **kw):
+        calls["highs"].append((sense, tuple(tight), separation))
+        return run(self, sense, tight=tight, separation=separation, **kw)
+
+    monkeypatch.setattr(dense_path.dense_lp, "solve_max", failing)
+    monkeypatch.setattr(highs_path.HighsModel, "run", counted)
+    return calls
+
+
+def _same(a, b, rtol=1e-9):
+    scale = max(1.0, float(np.nanmax(np.abs(b))))
+    assert np.array_equal(np.isnan(a), np.isnan(b))
+    ok = ~np.isnan(b)
+    assert np.all(np.abs(np.asarray(a)[ok] - np.asarray(b)[ok]) <= rtol * scale)
+
+
+def test_a_failed_lam2_lp_falls_back_alone(monkeypatch):
+    system, load = _problem()
+    ref = sd.shakedown_bounds(system, load)
+    assert ref.stages[0].stage == "lam2" and ref.stages[0].path == "dense"
+    before = {s.stage: s for s in ref.stages}
+    calls = _force_lam2_failure(monkeypatch)
+    b = sd.shakedown_bounds(system, load)
+    assert calls["lam2"] == 1
+    # only the lam2 LP went to HiGHS, besides the LPs that fall back without the failure
+    # (here one lam_low LP whose dense answer is not certified)
+    assert calls["highs"][0] == ("max", (), False)
+    assert len(calls["highs"]) == 1 + sum(s.fallbacks for s in ref.stages)
+    st = {s.stage: s for s in b.stages}
+    assert st["lam2"].path == "highs" and st["lam2"].fallbacks == 1
+    assert st["lam2"].reasons == ("forced failure (1)",)
+    assert [(k, s.fallbacks, s.reasons) for k, s in st.items() if k != "lam2"] == \
+        [(k, s.fallbacks, s.reasons) for k, s in before.items() if k != "lam2"]
+    assert st["lam_low"].dense_lps > 0 and "dense" in st["lam_high"].path
+    assert "LP(s) re-solved by HiGHS" in b.message and "lam2: 1" in b.message
+    for name in ("lam1", "lam2", "lam_separation"):
+        _same(np.array([getattr(b, name)]), np.array([getattr(ref, name)]))
+    _same(b.lam_low, ref.lam_low)
+    _same(np.where(b.lam_high_exact, b.lam_high, np.nan),
+          np.where(ref.lam_high_exact, ref.lam_high, np.nan))
+    assert b.limiting_constraint == ref.limiting_constraint
+    # the certificate of the HiGHS basis, certified again in the dense coordinates
+    cs = b.constraints
+    y = b.certificate
+    assert np.all(y >= -1e-12 * np.abs(y).max())
+    assert np.abs(cs.G.T @ y).max() <= 1e-9 * np.abs(cs.G).max() * np.abs(y).max()
+    assert (cs.c @ y) / (-(cs.m @ y)) == pytest.approx(b.lam2, rel=1e-9)
+
+
+def test_the_reference_path_agrees(monkeypatch):
+    system, load = _problem()
+    ref = sd.shakedown_bounds(system, load, solver="highs")
+    _force_lam2_failure(monkeypatch)
+    b = sd.shakedown_bounds(system, load)
+    assert b.lam2 == pytest.approx(ref.lam2, rel=1e-9)
+    assert b.lam1 == pytest.approx(ref.lam1, rel=1e-9)
+    assert ref.stages[0].path == "highs" and ref.stages[0].fallbacks == 0
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_finish_from_a_wrong_basis_reaches_the_optimum(seed):
+    """The crossover's last resort (issue 26: 8 negative multipliers, 12 violated rows) from a
+    basis that is neither primal nor dual feasible: clamp, dual simplex, primal finish."""
+    A, b, e = random_lp(8, 30, seed)
+    rng = np.random.default_rng(seed)
+    for _ in range(50):
+        T = np.sort(rng.choice(len(b), 8, replace=False))
+        tab = dense_lp.Tableau(A, b, e, T)
+        if not tab.singular and not tab.dual_feasible \
+                and np.any(tab.act0 > tab.b + 1e-6):
+            break
+    else:
+        pytest.fail("no wrong start basis drawn")
+    ans, out = dense_lp.finish_from(A, b, e, tab)
+    assert ans is not None and ans.status == "optimal" and out.dual_feasible
+    assert e @ ans.x == pytest.approx(highs_max(A, b, e), rel=1e-9)
+    assert max(dense_lp.kkt_residuals(A, b, e, ans.x, ans.y)) <= dense_lp.CERT_TOL
+
+
+def test_highs_basis_round_trip():
+    """HiGHS's optimal basis read as dense rows is the dense optimum's basis, and handed back
+    as a start it needs no pivot."""
+    from shakedown.bounds.constraints import Scales, extreme_constraints
+
+    system, load = _problem()
+    cs = extreme_constraints(system, load)
+    ch = Scales.of(cs).nondimensional(cs)
+    n = ch.n_nodes
+    A = np.vstack([np.hstack([ch.G, -ch.m[:, None]]), np.r_[np.zeros(n), -1.0][None, :]])
+    main, _ = dense_lp.solve_max(A, np.r_[ch.c, 0.0], np.r_[np.zeros(n), 1.0])
+    model = highs_path.HighsModel(ch)
+    ans = model.run("max")
+    T = model.tight_basis()
+    assert T is not None and set(T) == set(main.basis)
+    again = highs_path.HighsModel(ch)
+    assert again.start_from(T)
+    warm = again.run("max")
+    assert warm.iterations == 0 and warm.x[-1] == pytest.approx(ans.x[-1], rel=1e-12)
+
+
+def _record(stage, fallbacks, seconds, fallback_seconds):
+    return StageRecord(stage, "highs" if fallbacks else "dense", 1, 0, fallbacks, fallbacks,
+                       ("forced failure (1)",) if fallbacks else (), seconds, fallback_seconds)
+
+
+def test_the_verdict_mentions_a_fallback_that_cost_more_than_the_rest():
+    system, load = _problem()
+    b = sd.shakedown_bounds(system, load)
+    costly = (_record("lam2", 1, 9.0, 8.0), _record("lam_low", 0, 2.0, 0.0))
+    cheap = (_record("lam2", 1, 3.0, 2.0), _record("lam_low", 0, 8.0, 0.0))
+    text = dataclasses.replace(b, stages=costly, solve_time=11.0).verdict()
+    assert "1 LP(s) (1 lam2) could not be certified by the dense path (forced failure (1))" \
+        in text and "8 s of the 11 s" in text
+    assert "HiGHS" not in dataclasses.replace(b, stages=cheap, solve_time=11.0).verdict()
+    assert "HiGHS" not in b.verdict()
+    assert costly_fallback((), 1.0) == ""
+
+
+def test_stages_drive_the_progress_display():
+    system, load = _problem()
+    seen = []
+
+    def progress(iterable, total=None, desc=""):
+        seen.append((total, desc))
+        for item in iterable:
+            seen.append(item)
+            yield item
+
+    b = sd.shakedown_bounds(system, load, progress=progress)
+    assert seen[0] == (5, "shakedown bounds")
+    assert seen[1:] == ["lam2", "lam_low", "lam_high", "adjacency", "separation"]
+    assert [s.stage for s in b.stages][:3] == ["lam2", "lam_low", "lam_high"]
+    assert b.to_dict()["stages"][0]["stage"] == "lam2"
+
+
+def test_a_highs_lp_that_stops_without_an_answer_is_not_read_as_infeasible(monkeypatch):
+    """Issue 26: the 2000-crack lam2 LP hit HiGHS's time limit under load and the result said
+    "infeasible" (lam1 = lam2 = nan).  A time limit in a forced lam2 fallback now raises."""
+    from shakedown.bounds.lp import LPAnswer, ReusableLP
+    from shakedown.bounds.outcome import value
+    from shakedown.model.errors import SolverError
+
+    e = np.zeros(0)
+    stopped = LPAnswer("Time limit reached", np.nan, e, e, e, *(np.nan,) * 4, 12)
+    with pytest.raises(SolverError, match="Time limit reached"):
+        value(stopped)
+    assert np.isnan(value(dataclasses.replace(stopped, status="infeasible")))
+    system, load = _problem()
+    _force_lam2_failure(monkeypatch)
+    monkeypatch.setattr(ReusableLP, "solve", lambda self: stopped)
+    with pytest.raises(SolverError, match="time_limit"):
+        sd.shakedown_bounds(system, load)
+    with pytest.raises(SolverError):
+        sd.shakedown_bounds(system, load, solver="highs")
