@@ -12,8 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..model.errors import InputError
-from ..model.errors import SolverError
+from ..model.errors import InputError, SolverError
 from .lp import LPAnswer
 from .result import LAM_RTOL
 
