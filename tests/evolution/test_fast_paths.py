@@ -282,8 +282,10 @@ def test_critical_friction_once_per_system(monkeypatch):
     s = coupled(rng, 5)
     load = harmonic_load(rng, s)
     calls = []
-    real = sd.DiscreteSystem._critical_friction
-    monkeypatch.setattr(sd.DiscreteSystem, "_critical_friction",
+    import shakedown.model.system as system_module
+
+    real = system_module.critical_friction_2d
+    monkeypatch.setattr(system_module, "critical_friction_2d",
                         lambda self, k: (calls.append(k), real(self, k))[1])
     first = s.critical_friction()
     for _ in range(3):

@@ -142,7 +142,7 @@ def test_sampling_is_reproducible_starts_virgin_and_keeps_contact():
         (dict(initial_slips=np.zeros((3, 3))), r"initial_slips must have shape \(n_states, 2\)"),
         (dict(initial_slips=0), "initial_slips as a count must be >= 1"),
         (dict(initial_slips=[[np.inf, 0.0]]), "initial_slips must be finite"),
-        (dict(n_jobs=0), "n_jobs must be >= 1"),
+        (dict(n_jobs=0), "n_jobs must be an integer >= 1"),
         (dict(solver="magic"), "solver must be 'cycles' or 'steady'"),
         (dict(lam=np.nan), "lam must be a finite number >= 0"),
         (dict(scale=-1.0), "scale must be a positive number"),

@@ -320,7 +320,7 @@ def test_scene_errors_name_the_key_and_the_file(tmp_path):
                                     "1\n" * 9)
     (tmp_path / "s.toml").write_text('[model]\nkind = "matrices"\nK_file = "k.mtx"\n'
                                      'friction = 0.5\n[load]\nq0 = [0]\np0 = [1]\n')
-    with pytest.raises(sd.SceneError, match=r"s\.toml: \[model\] K_file 'k\.mtx'.*even size"):
+    with pytest.raises(sd.SceneError, match=r"s\.toml: \[model\] K_file 'k\.mtx'.*square of size 2N"):
         build(load_scene(tmp_path / "s.toml"))
     (tmp_path / "s.toml").write_text('[model]\nkind = "matrices"\nK_file = "k.mtx"\n'
                                      'tangential_dofs = [1]\nfriction = 0.5\n')

@@ -71,7 +71,7 @@ def test_3d_cycles_analysis_writes_verdict_tables_and_cone_pictures(tmp_path):
     out = tmp_path / "out"
     assert main(["run", str(write(tmp_path, SCENE)), "-o", str(out), "-q"]) == 0
     data = json.loads((out / "cycles.json").read_text())
-    assert data["verdict"].startswith("At lam = 1, cyclic slip: W = ")
+    assert data["verdict"].startswith("At lam = 1.000, cyclic slip: W = ")
     assert "node 1 slip" in data["verdict"]
     # the discrete closed form of the rotating node (tests/evolution/test_cone_cycles.py)
     a = 2 * np.pi / 16

@@ -138,7 +138,7 @@ def test_system_source_is_keyed_on_content_and_a_changed_model_is_not_resumed(tm
     assert "the model 'one' (1 node)" in ax.get_title()
     assert "every node slips" in " ".join(t.get_text() for t in ax.get_legend().get_texts()) \
         or not np.isfinite(res.realisations["lam_u"]).any()
-    assert plot_fractions(res).get_ylabel() == "fraction of nodes (steady cycle)"
+    assert plot_fractions(res).get_ylabel() == "fraction of nodes (steady cycle) [-]"
     plt.close("all")
     with pytest.raises(InputError, match="another spec"):
         run_sweep(SweepSpec(source=c, lams=(0.5, 1.5), n_states=2, steps_per_cycle=16),
