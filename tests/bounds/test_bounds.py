@@ -303,6 +303,7 @@ def test_kachanov_400_default_equals_exact_intervals():
     check_certificate(b)
 
 
+@pytest.mark.slow  # about 100 s (50 s) on the 2-core CI machine: the default run stays under 10 min
 def test_n2000_finishes():
     """N = 2000, dense (issue 14: 803 s, then 595 s; about 45 s with the LPs and walks in the
     coordinates of the lam2 basis): every answer certified, the lam2 certificate (Farkas) and

@@ -166,6 +166,7 @@ def test_sparse_steady_cycle_and_plot_inputs_equal_dense(banded_system, harmonic
     np.testing.assert_array_equal(a.stuck_nodes, b.stuck_nodes)
 
 
+@pytest.mark.slow  # about 100 s (50 s) on the 2-core CI machine: the default run stays under 10 min
 def test_sparse_2000_cracks_equal_dense():
     """2000 truncated-interaction cracks (radius 3) in the default run (issue 14: an N = 2000
     test fast enough for it): the sparse run (SuperLU) against the same matrix dense (compiled
