@@ -9,7 +9,7 @@ from .cone_states import SEPARATED, SLIP
 from .kernel_jit import njit
 
 #: Reduced systems up to this size are solved by LU; larger ones by GMRES first (below).
-DENSE_MAX = 300
+DENSE_MAX = 64
 
 
 @njit(cache=True)
