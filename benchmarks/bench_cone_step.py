@@ -199,7 +199,7 @@ def part_siconos(n, lam, repeats, seed=0, baseline=None, solvers=("nsgs", "nsn_a
                 steps=len(RB), solvers=solvers)
 
 
-def part_big(n, lam, S=64, anderson=0):
+def part_big(n, lam, S=64, anderson=0, max_cycles=200):
     import shakedown as sd
 
     s, load = coupled_system_3d(n, seed=1)
@@ -211,8 +211,8 @@ def part_big(n, lam, S=64, anderson=0):
               f"load {os.getloadavg()[0]:.1f}", flush=True)
 
     kw = dict(anderson_memory=anderson) if anderson else {}
-    run = sd.solve_cycles(s, load, lam, steps_per_cycle=S, max_cycles=200, progress=progress,
-                          **kw)
+    run = sd.solve_cycles(s, load, lam, steps_per_cycle=S, max_cycles=max_cycles,
+                          progress=progress, **kw)
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     slipped = n - run.stuck_nodes.size if run.period else -1
     np.save(f"/tmp/bench_cone_big_{n}_{anderson}_slip.npy", run.final_slip)
@@ -258,6 +258,8 @@ def main():
     ap.add_argument("--out", default=None)
     ap.add_argument("--anderson", type=int, default=0,
                     help="part big: anderson_memory of solve_cycles (0: plain cycling)")
+    ap.add_argument("--big-max-cycles", type=int, default=200,
+                    help="part big: budget of periods (a few: a per-period comparison)")
     ap.add_argument("--repo", default=None, help="import shakedown from this tree (baseline)")
     ap.add_argument("--baseline", default=None,
                     help="part siconos: also time the step of this tree (e.g. /work/main)")
@@ -305,7 +307,7 @@ def main():
                          f"{np.median(y):.2f}x |")
         lines.append("")
     if "big" in parts:
-        r = part_big(a.big_n, a.big_lam, anderson=a.anderson)
+        r = part_big(a.big_n, a.big_lam, anderson=a.anderson, max_cycles=a.big_max_cycles)
         import shakedown
 
         lines += [f"## Cycles at N = {r['n']} (lam = {r['lam']}, 64 steps per period, "

@@ -22,7 +22,10 @@ rows ``M q~+ - g n p+ + c rho_T P v~+ = 0`` remain (``n = t / |t|``, ``c = g R /
 ``P = I - n n^T``, ``M = I - c P``; derived from the linearization, the right-hand side
 vanishes identically), on a separated node ``q+ = 0, p+ = 0``.  The unknowns are the slips of
 the slip and separated nodes and the gaps of the separated nodes: a dense system of that size,
-solved by LU with partial pivoting (LAPACK through numba).  Globalisation: backtracking on the
+solved by LU with partial pivoting (LAPACK through numba) up to ``DENSE_MAX`` unknowns, beyond by
+GMRES started from the current point to a relative residual tied to the AC residual (an inexact
+Newton method, :func:`.cone_linear._linear_solve`; the stopping test below is unchanged).
+Globalisation: backtracking on the
 merit ``sum |phi|^2`` of the AC residual (in force units) from the Newton point towards the
 current one; the iteration stops when the residual is below ``tol`` of the force scale or stalls.
 
