@@ -203,6 +203,8 @@ def part_big(n, lam, S=64, anderson=0, max_cycles=200):
     import shakedown as sd
 
     s, load = coupled_system_3d(n, seed=1)
+    s4, load4 = coupled_system_3d(4, seed=1)  # compile (or load) the numba kernels first
+    sd.solve_cycles(s4, load4, lam, steps_per_cycle=S, max_cycles=2)
     t0, c0 = time.perf_counter(), time.process_time()
 
     def progress(c, total, W):  # one line per period, so that an interrupted run still reports
