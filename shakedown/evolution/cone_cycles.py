@@ -18,7 +18,7 @@ previous step's.
 
 Acceleration (``anderson_memory > 0``, off by default): the start of the next period is the
 Anderson (type II) combination of the last ``anderson_memory + 1`` period starts ``x`` and their
-one-period images ``P(x)`` (the update :func:`~.steady_maps._anderson` of
+one-period images ``P(x)`` (the update :func:`~.anderson._anderson` of
 :func:`shakedown.steady_cycle`) instead of ``P(x)`` itself, reset to the plain image when the
 state change grows.  The steady test is unchanged (a simulated period whose end differs from its
 start by at most ``tol``), so the recorded orbit is a simulated steady period; what may differ
@@ -37,11 +37,11 @@ import numpy as np
 from ..model.errors import InputError, ShapeError
 from ..model.threads import single_blas_thread
 from ..model.validation import check_count, check_load_factor, check_same_nodes
+from .anderson import _anderson
 from .cone_step import ConeStepSolver
 from .cone_tables import table_3d
 from .cycle_results import SHAKEDOWN_FACTOR, CycleRun, _energy
 from .events import CycleRecord
-from .steady_maps import _anderson
 from .step_types import SEPARATED
 
 
