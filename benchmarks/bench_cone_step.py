@@ -40,7 +40,10 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent))
+if "--repo" in sys.argv:  # import shakedown from another tree (e.g. main, for the baseline)
+    sys.path.insert(0, sys.argv[sys.argv.index("--repo") + 1])
+else:
+    sys.path.insert(0, str(HERE.parent))
 SICONOS_PYTHON = "/usr/bin/python3"
 WORKER = HERE / "siconos_fc3d_worker.py"
 
@@ -117,55 +120,105 @@ def period_steps(s, load, lam, S=64, settle=2):
     return sol, np.array(RB), U0, np.array(U), np.array(R)
 
 
-def part_siconos(n, lam, repeats):
-    s, load = coupled_system_3d(n)
+def time_steps(sol, RB, guesses):
+    """Wall and CPU time [s] per step of ``sol.solve_raw`` (full verification), and answers."""
+    wall, cpu, R = [], [], []
+    for rb, g in zip(RB, guesses, strict=True):
+        t0, c0 = time.perf_counter(), time.process_time()
+        out = sol.solve_raw(rb, g, equilibrium=True)
+        wall.append(time.perf_counter() - t0)
+        cpu.append(time.process_time() - c0)
+        R.append(out[1].ravel())
+    return np.array(wall), np.array(cpu), np.array(R)
+
+
+def part_steptimes(inp, out):
+    """Time this tree's step on the steps of ``inp`` (written by :func:`part_siconos`): the
+    baseline (``--repo``) side of the comparison."""
+    import shakedown as sd
+    from shakedown.evolution.cone_step import ConeStepSolver
+
+    with np.load(inp) as d:
+        A, B, C, f, RB, U0 = (d[k] for k in ("A", "B", "C", "f", "RB", "U0"))
+    sol = ConeStepSolver(sd.DiscreteSystem(A, B, C, friction=f, dim=3))
+    res = {}
+    for name, guesses in (("warm", list(U0)), ("cold", [None] * len(RB))):
+        time_steps(sol, RB[:2], guesses[:2])  # compile / warm the caches
+        res[f"{name}_wall"], res[f"{name}_cpu"], res[f"{name}_R"] = time_steps(sol, RB, guesses)
+    np.savez(out, **res)
+
+
+def part_siconos(n, lam, repeats, seed=0, baseline=None, solvers=("nsgs", "nsn_ac")):
+    """Ours (this tree), the baseline tree (``baseline``, in a subprocess) and Siconos on the
+    same steps, repeats interleaved; per start the median over the steps of the median over the
+    repeats, wall and CPU."""
+    s, load = coupled_system_3d(n, seed=seed)
     sol, RB, U0, U, R = period_steps(s, load, lam)
     F = np.abs(RB).max()
     slipping = float(np.mean([np.mean(np.hypot(*u[:, :2].T) > 0) for u in U]))
-    times = {"ours_warm": [], "ours_cold": []}
-    for _ in range(repeats):
-        for name, guesses in (("ours_warm", U0), ("ours_cold", [None] * len(RB))):
-            t = []
-            for rb, g in zip(RB, guesses, strict=True):
-                t0 = time.perf_counter()
-                sol.solve_raw(rb, g, equilibrium=True)
-                t.append(time.perf_counter() - t0)
-            times[name].append(t)
     W, Q, perm = to_fc3d(sol.data.Kn, RB)
     mu = s.friction_xy[:, 0]
-    solvers = ("nsgs", "nsn_ac", "nsn_fb", "admm")
-    rows, diffs = {}, {}
-    ours = R.reshape(len(R), -1)[:, perm]
-    for warm in (True, False):
-        per = {k: [] for k in solvers}
+    ours = R.reshape(len(R), -1)
+    times = {}  # (who, start, clock) -> list over repeats of per-step arrays
+    diffs = {}
+
+    def add(key, arr):
+        times.setdefault(key, []).append(arr)
+
+    with tempfile.TemporaryDirectory() as tmp:
+        fin, fout = Path(tmp) / "steps.npz", Path(tmp) / "base.npz"
+        np.savez(fin, A=s.A, B=s.B, C=s.C, f=s.friction_xy[:, 0], RB=RB, U0=np.array(U0))
         for _ in range(repeats):
-            out = run_siconos(W, Q, mu, solvers, warm)
-            for k in solvers:
-                per[k].append(out[f"{k}_time"])
-                ok = out[f"{k}_info"] == 0
-                d = np.abs(out[f"{k}_r"] - ours).max(axis=1) / F
-                diffs[(k, warm)] = (float(d.max()), int((~ok).sum()))
-        for k in solvers:
-            rows[(k, warm)] = float(np.median(np.median(np.array(per[k]), axis=0)))
-    ours_t = {k: float(np.median(np.median(np.array(v), axis=0))) for k, v in times.items()}
-    return dict(n=n, lam=lam, F=F, slipping=slipping, ours=ours_t, siconos=rows, diffs=diffs,
-                steps=len(RB))
+            for start, guesses in (("warm", U0), ("cold", [None] * len(RB))):
+                w_, c_, Rr = time_steps(sol, RB, guesses)
+                add(("this code", start, "wall"), w_)
+                add(("this code", start, "cpu"), c_)
+                diffs[("this code", start)] = (float(np.abs(Rr - ours).max() / F), 0)
+            if baseline:
+                env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
+                subprocess.run([sys.executable, __file__, "--parts", "steptimes", "--repo",
+                                baseline, "--steps-in", str(fin), "--steps-out", str(fout)],
+                               check=True, env=env)
+                with np.load(fout) as d:
+                    for start in ("warm", "cold"):
+                        add(("main", start, "wall"), d[f"{start}_wall"])
+                        add(("main", start, "cpu"), d[f"{start}_cpu"])
+                        diffs[("main", start)] = (
+                            float(np.abs(d[f"{start}_R"] - ours).max() / F), 0)
+            for warm in (True, False):
+                out = run_siconos(W, Q, mu, solvers, warm)
+                start = "warm" if warm else "cold"
+                for k in solvers:
+                    add((f"Siconos {k.upper()}", start, "wall"), out[f"{k}_time"])
+                    add((f"Siconos {k.upper()}", start, "cpu"), out[f"{k}_cpu"])
+                    ok = out[f"{k}_info"] == 0
+                    d = np.abs(out[f"{k}_r"] - ours[:, perm]).max(axis=1) / F
+                    diffs[(f"Siconos {k.upper()}", start)] = (float(d.max()), int((~ok).sum()))
+    med = {k: float(np.median(np.median(np.array(v), axis=0))) for k, v in times.items()}
+    return dict(n=n, lam=lam, seed=seed, F=F, slipping=slipping, med=med, diffs=diffs,
+                steps=len(RB), solvers=solvers)
 
 
-def part_big(n, lam, S=64):
+def part_big(n, lam, S=64, anderson=0, max_cycles=200):
     import shakedown as sd
 
     s, load = coupled_system_3d(n, seed=1)
-    t0 = time.perf_counter()
+    s4, load4 = coupled_system_3d(4, seed=1)  # compile (or load) the numba kernels first
+    sd.solve_cycles(s4, load4, lam, steps_per_cycle=S, max_cycles=2)
+    t0, c0 = time.perf_counter(), time.process_time()
 
     def progress(c, total, W):  # one line per period, so that an interrupted run still reports
-        print(f"  N = {n}: period {c} done at {time.perf_counter() - t0:.1f} s, W = {W:.6g}, "
+        print(f"  N = {n}: period {c} done at {time.perf_counter() - t0:.1f} s wall, "
+              f"{time.process_time() - c0:.1f} s CPU, W = {W:.10g}, "
               f"load {os.getloadavg()[0]:.1f}", flush=True)
 
-    run = sd.solve_cycles(s, load, lam, steps_per_cycle=S, max_cycles=200, progress=progress)
-    wall = time.perf_counter() - t0
+    kw = dict(anderson_memory=anderson) if anderson else {}
+    run = sd.solve_cycles(s, load, lam, steps_per_cycle=S, max_cycles=max_cycles,
+                          progress=progress, **kw)
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     slipped = n - run.stuck_nodes.size if run.period else -1
-    return dict(n=n, lam=lam, wall=wall, status=run.status, cycles=run.n_cycles,
+    np.save(f"/tmp/bench_cone_big_{n}_{anderson}_slip.npy", run.final_slip)
+    return dict(n=n, lam=lam, wall=wall, cpu=cpu, anderson=anderson, status=run.status, cycles=run.n_cycles,
                 period=run.period, slipped=slipped, W=run.steady_dissipation,
                 newton=run.statistics["newton_iterations"], steps=run.statistics["n_steps"],
                 energy=run.energy_identity.discrete_relative_difference if run.period else None)
@@ -205,34 +258,67 @@ def main():
     ap.add_argument("--big-lam", type=float, default=0.8)
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--out", default=None)
+    ap.add_argument("--anderson", type=int, default=0,
+                    help="part big: anderson_memory of solve_cycles (0: plain cycling)")
+    ap.add_argument("--big-max-cycles", type=int, default=200,
+                    help="part big: budget of periods (a few: a per-period comparison)")
+    ap.add_argument("--repo", default=None, help="import shakedown from this tree (baseline)")
+    ap.add_argument("--baseline", default=None,
+                    help="part siconos: also time the step of this tree (e.g. /work/main)")
+    ap.add_argument("--seeds", type=int, default=1, help="part siconos: random systems")
+    ap.add_argument("--steps-in", default=None)
+    ap.add_argument("--steps-out", default=None)
     a = ap.parse_args()
     lines = [f"Machine: {platform.machine()} {os.cpu_count()} cores, python {platform.python_version()}, "
              f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS')}",
              f"Load at start: {os.getloadavg()}", ""]
     parts = a.parts.split(",")
+    if "steptimes" in parts:
+        part_steptimes(a.steps_in, a.steps_out)
+        return
     if "siconos" in parts and siconos_available():
-        r = part_siconos(a.n, a.lam, a.repeats)
-        lines += [f"## Step at N = {r['n']} (lam = {r['lam']}, {r['steps']} steps of one period, "
-                  f"{100 * r['slipping']:.0f}% of the node-steps slipping)", "",
-                  "| solver | start | median per step [ms] | ratio to ours (same start) | "
-                  "max diff / F | not converged |", "|---|---|---|---|---|---|"]
-        for warm in (True, False):
-            o = r["ours"]["ours_warm" if warm else "ours_cold"]
-            lines.append(f"| this code (Newton, verified) | {'warm' if warm else 'cold'} | "
-                         f"{1e3 * o:.3f} | 1 | - | - |")
-            for k in ("nsgs", "nsn_ac", "nsn_fb", "admm"):
-                t = r["siconos"][(k, warm)]
-                d, bad = r["diffs"][(k, warm)]
-                lines.append(f"| Siconos FC3D {k.upper()} | {'warm' if warm else 'cold'} | "
-                             f"{1e3 * t:.3f} | {t / o:.1f}x | {d:.2e} | {bad} |")
-        lines += ["", f"Load after: {os.getloadavg()}", ""]
+        summary = []
+        for seed in range(a.seeds):
+            r = part_siconos(a.n, a.lam, a.repeats, seed=seed, baseline=a.baseline)
+            m = r["med"]
+            lines += [f"### Step at N = {r['n']}, system seed {seed} (lam = {r['lam']}, "
+                      f"{r['steps']} steps of one period, {100 * r['slipping']:.0f}% of the "
+                      "node-steps slipping)", "",
+                      "| solver | start | median per step, wall [ms] | CPU [ms] | ratio to this "
+                      "code (CPU) | max diff / F | not converged |", "|---|---|---|---|---|---|---|"]
+            who = ["this code"] + (["main"] if a.baseline else []) + [
+                f"Siconos {k.upper()}" for k in r["solvers"]]
+            for start in ("warm", "cold"):
+                o = m[("this code", start, "cpu")]
+                for w_ in who:
+                    t, c = m[(w_, start, "wall")], m[(w_, start, "cpu")]
+                    d, bad = r["diffs"][(w_, start)]
+                    lines.append(f"| {w_} | {start} | {1e3 * t:.3f} | {1e3 * c:.3f} | "
+                                 f"{c / o:.1f}x | {d:.2e} | {bad} |")
+                sic = min(m[(w_, start, "cpu")] for w_ in who if w_.startswith("Siconos"))
+                summary.append((seed, start, sic / o,
+                                m[("main", start, "cpu")] / o if a.baseline else float("nan")))
+            lines += ["", f"Load after: {os.getloadavg()}", ""]
+        lines += ["### Summary over systems: fastest Siconos solver / this code (CPU per step)", "",
+                  "| start | median | worst (smallest) | main / this code (median) |",
+                  "|---|---|---|---|"]
+        for start in ("warm", "cold"):
+            x = np.array([q[2] for q in summary if q[1] == start])
+            y = np.array([q[3] for q in summary if q[1] == start])
+            lines.append(f"| {start} | {np.median(x):.1f}x | {x.min():.1f}x | "
+                         f"{np.median(y):.2f}x |")
+        lines.append("")
     if "big" in parts:
-        r = part_big(a.big_n, a.big_lam)
-        lines += [f"## Cycles at N = {r['n']} (lam = {r['lam']}, 64 steps per period)", "",
+        r = part_big(a.big_n, a.big_lam, anderson=a.anderson, max_cycles=a.big_max_cycles)
+        import shakedown
+
+        lines += [f"## Cycles at N = {r['n']} (lam = {r['lam']}, 64 steps per period, "
+                  f"anderson_memory = {r['anderson']}, code {Path(shakedown.__file__).parent})", "",
                   f"status {r['status']}, period {r['period']}, {r['cycles']} periods, "
                   f"{r['slipped']} of {r['n']} nodes slip in the steady orbit, "
                   f"{r['steps']} steps, {r['newton']} Newton iterations, wall "
-                  f"**{r['wall']:.1f} s**; energy identity (discrete, relative) {r['energy']}",
+                  f"{r['wall']:.1f} s, CPU **{r['cpu']:.1f} s**, W = {r['W']:.12g}; energy identity "
+                  f"(discrete, relative) {r['energy']}",
                   f"Load after: {os.getloadavg()}", ""]
     if "order" in parts:
         rows = part_order()

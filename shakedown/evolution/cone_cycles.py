@@ -15,6 +15,16 @@ F / k_i``.
 Warm start: step ``j`` of period ``c >= 2`` starts the Newton method from the increment and gaps
 of step ``j`` of period ``c - 1`` (the orbit being approached repeats them), period 1 from the
 previous step's.
+
+Acceleration (``anderson_memory > 0``, off by default): the start of the next period is the
+Anderson (type II) combination of the last ``anderson_memory + 1`` period starts ``x`` and their
+one-period images ``P(x)`` (the update :func:`~.anderson._anderson` of
+:func:`shakedown.steady_cycle`) instead of ``P(x)`` itself, reset to the plain image when the
+state change grows.  The steady test is unchanged (a simulated period whose end differs from its
+start by at most ``tol``), so the recorded orbit is a simulated steady period; what may differ
+from plain cycling is the path, and, where the steady state is not unique (locked-in slips of
+nodes that never slip), which steady state is reached.  Period 2 is tested only after a plain
+period.
 """
 
 from __future__ import annotations
@@ -27,6 +37,7 @@ import numpy as np
 from ..model.errors import InputError, ShapeError
 from ..model.threads import single_blas_thread
 from ..model.validation import check_count, check_load_factor, check_same_nodes
+from .anderson import _anderson
 from .cone_step import ConeStepSolver
 from .cone_tables import table_3d
 from .cycle_results import SHAKEDOWN_FACTOR, CycleRun, _energy
@@ -91,7 +102,8 @@ def _check(system, load, lam, initial_slip, initial_gap, method, steps, max_cycl
 
 def solve_cycles_3d(system, load, lam, initial_slip=None, initial_gap=None,
                     method="implicit", steps_per_cycle=200, max_cycles=200, tol=1e-10, *,
-                    progress=None, record_history=False, solver=None, feas_tol=None):
+                    progress=None, record_history=False, solver=None, feas_tol=None,
+                    anderson_memory=0):
     """:func:`shakedown.solve_cycles` for a ``dim = 3`` system (same parameters and result).
 
     ``initial_slip`` has shape (N, 2) or (n_states, N, 2) (a list of runs then); ``method`` must
@@ -99,10 +111,15 @@ def solve_cycles_3d(system, load, lam, initial_slip=None, initial_gap=None,
     In the result, ``final_slip`` is (N, 2), ``cycle_start_slips`` (n_cycles + 1, N, 2), the
     steady table has columns ``slip_x, slip_y, q_x, q_y`` instead of ``slip, q``, states are
     ``stick / slip / separation``; ``final_active_sets`` holds the last period's Newton
-    pieces (steps, N).
+    pieces (steps, N).  ``anderson_memory``: periods remembered by the steady-state accelerator
+    (0: plain cycling, the default; see the module docstring).
     """
     lam, V0, W0, n_steps, max_cycles, tol, batch = _check(
         system, load, lam, initial_slip, initial_gap, method, steps_per_cycle, max_cycles, tol)
+    if isinstance(anderson_memory, bool) or not isinstance(anderson_memory, (int, np.integer)) \
+            or anderson_memory < 0:
+        raise InputError(f"anderson_memory must be an integer >= 0 (0: plain cycling, e.g. 5); "
+                         f"got {anderson_memory!r}")
     if solver is None:
         solver = ConeStepSolver(system) if feas_tol is None else ConeStepSolver(
             system, feas_tol=feas_tol)
@@ -110,7 +127,7 @@ def solve_cycles_3d(system, load, lam, initial_slip=None, initial_gap=None,
         raise InputError("solver was built for another system; pass solver=None")
     with single_blas_thread():
         runs = [_run(system, solver, load, lam, v0, w0, n_steps, max_cycles, tol, progress,
-                     record_history) for v0, w0 in zip(V0, W0, strict=True)]
+                     record_history, int(anderson_memory)) for v0, w0 in zip(V0, W0, strict=True)]
     return runs if batch else runs[0]
 
 
@@ -178,7 +195,8 @@ def _period(solver, c, v, w, qg, pg, U_prev, st0):
     return rec, U
 
 
-def _run(system, solver, load, lam, v0, w0, n_steps, max_cycles, tol, progress, record_history):
+def _run(system, solver, load, lam, v0, w0, n_steps, max_cycles, tol, progress, record_history,
+         memory=0):
     t_start = time.perf_counter()
     tot0 = dict(solver.totals)
     d = solver.data
@@ -192,6 +210,8 @@ def _run(system, solver, load, lam, v0, w0, n_steps, max_cycles, tol, progress, 
     statuses: dict[str, int] = {}
     max_res, period, ok, fail_msg, U_prev = 0.0, 0, True, "", None
     st0 = np.where(w * d.kN > 0, SEPARATED, 0).astype(np.int8)
+    X, G, jumped = [], [], False  # Anderson memory: period starts and their changes
+    v_end = v.copy()
     for c in range(1, max_cycles + 1):
         rec, U = _period(solver, c, v, w, qg, pg, U_prev, st0)
         for k_, m_ in (rec.statuses or {}).items():
@@ -205,21 +225,34 @@ def _run(system, solver, load, lam, v0, w0, n_steps, max_cycles, tol, progress, 
         if history is not None:
             history.append(rec)
         v, w, st0 = rec.v[-1].copy(), rec.w[-1].copy(), rec.states[-1].copy()
+        v_end = v.copy()
         W_list.append(rec.dissipation)
         change.append(_change(d, F, v, w, starts_v[-1], starts_w[-1]))
-        starts_v.append(v.copy())
-        starts_w.append(w.copy())
         if progress is not None:
             progress(c, max_cycles, rec.dissipation)
         if change[-1] <= tol:
             period = 1
-        elif c >= 2 and _change(d, F, v, w, starts_v[-3], starts_w[-3]) <= tol:
+        elif c >= 2 and not jumped and _change(d, F, v, w, starts_v[-2], starts_w[-2]) <= tol:
             period = 2
         if period:
+            starts_v.append(v.copy())
+            starts_w.append(w.copy())
             break
+        jumped = False
+        if memory:
+            if len(change) >= 2 and change[-1] > change[-2]:  # safeguard: restart the memory
+                X, G = [], []
+            X.append(starts_v[-1].ravel())
+            G.append((v - starts_v[-1]).ravel())
+            X, G = X[-memory - 1:], G[-memory - 1:]
+            x = _anderson(X, G, v.ravel())
+            if len(X) >= 2 and np.all(np.isfinite(x)):
+                v, jumped = x.reshape(v.shape), True
+        starts_v.append(v.copy())
+        starts_w.append(w.copy())
     return _finish_3d(system, solver, load, lam, n_steps, tol, F, records, history, period,
-                      W_list, change, starts_v, starts_w, v, w, ok, fail_msg, statuses, max_res,
-                      tot0, t_start, max_cycles)
+                      W_list, change, starts_v, starts_w, v_end, w, ok, fail_msg, statuses,
+                      max_res, tot0, t_start, max_cycles)
 
 
 def _finish_3d(system, solver, load, lam, n_steps, tol, F, records, history, period, W_list,

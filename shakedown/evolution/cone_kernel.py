@@ -22,7 +22,10 @@ rows ``M q~+ - g n p+ + c rho_T P v~+ = 0`` remain (``n = t / |t|``, ``c = g R /
 ``P = I - n n^T``, ``M = I - c P``; derived from the linearization, the right-hand side
 vanishes identically), on a separated node ``q+ = 0, p+ = 0``.  The unknowns are the slips of
 the slip and separated nodes and the gaps of the separated nodes: a dense system of that size,
-solved by LU with partial pivoting (LAPACK through numba).  Globalisation: backtracking on the
+solved by LU with partial pivoting (LAPACK through numba) up to ``DENSE_MAX`` unknowns, beyond by
+GMRES started from the current point to a relative residual tied to the AC residual (an inexact
+Newton method, :func:`.cone_linear._linear_solve`; the stopping test below is unchanged).
+Globalisation: backtracking on the
 merit ``sum |phi|^2`` of the AC residual (in force units) from the Newton point towards the
 current one; the iteration stops when the residual is below ``tol`` of the force scale or stalls.
 
@@ -95,9 +98,11 @@ def _classify(r, u, sx, sy, g, rhoT, rhoN, states, phi, nhat, cfac, slack):
 
 
 @njit(cache=True)
-def _newton_point(Kn, rb, sx, sy, g, rhoT, states, nhat, cfac, unew, dense_max):
+def _newton_point(Kn, rb, sx, sy, g, rhoT, states, nhat, cfac, unew, dense_max, u, eta):
     """The reduced semismooth Newton step of the current piece (see the module docstring):
-    ``unew`` (3N,); returns False when the reduced matrix is singular."""
+    ``unew`` (3N,); returns False when the reduced matrix is singular.  ``u``: the current
+    point (the start of an iterative solve), ``eta``: the forcing term of the linear solve
+    (:func:`.cone_linear._linear_solve`)."""
     n = g.size
     idx = np.empty(3 * n, np.int64)  # unknowns (indices into u)
     m = 0
@@ -111,6 +116,10 @@ def _newton_point(Kn, rb, sx, sy, g, rhoT, states, nhat, cfac, unew, dense_max):
     unew[:] = 0.0
     if m == 0:
         return True
+    # columns scaled to unit diagonal magnitude before pivoting (any units)
+    cs = np.empty(m)
+    for col in range(m):
+        cs[col] = 1.0 / np.sqrt(max(abs(Kn[idx[col], idx[col]]), 1e-300))
     J = np.empty((m, m))
     h = np.empty(m)
     row = 0
@@ -125,37 +134,31 @@ def _newton_point(Kn, rb, sx, sy, g, rhoT, states, nhat, cfac, unew, dense_max):
             b1, b2 = m12 / sx[i], m22 / sy[i]
             gx, gy = g[i] * nx, g[i] * ny
             kx, ky, kp = 3 * i, 3 * i + 1, 3 * i + 2
+            Kx, Ky, Kp = Kn[kx], Kn[ky], Kn[kp]
             for col in range(m):
                 k = idx[col]
-                J[row, col] = a1 * Kn[kx, k] + a2 * Kn[ky, k] - gx * Kn[kp, k]
-                J[row + 1, col] = b1 * Kn[kx, k] + b2 * Kn[ky, k] - gy * Kn[kp, k]
+                J[row, col] = (a1 * Kx[k] + a2 * Ky[k] - gx * Kp[k]) * cs[col]
+                J[row + 1, col] = (b1 * Kx[k] + b2 * Ky[k] - gy * Kp[k]) * cs[col]
             h[row] = -(a1 * rb[kx] + a2 * rb[ky] - gx * rb[kp])
             h[row + 1] = -(b1 * rb[kx] + b2 * rb[ky] - gy * rb[kp])
             cr = c * rhoT[i]
-            for col in range(m):  # the own slip columns (located by a scan: m is small)
-                k = idx[col]
-                if k == kx:
-                    J[row, col] += cr * pxx * sx[i]
-                    J[row + 1, col] += cr * pxy * sx[i]
-                elif k == ky:
-                    J[row, col] += cr * pxy * sy[i]
-                    J[row + 1, col] += cr * pyy * sy[i]
+            # the own slip columns sit at the own rows (rows and columns in the same order)
+            J[row, row] += cr * pxx * sx[i] * cs[row]
+            J[row + 1, row] += cr * pxy * sx[i] * cs[row]
+            J[row, row + 1] += cr * pxy * sy[i] * cs[row + 1]
+            J[row + 1, row + 1] += cr * pyy * sy[i] * cs[row + 1]
             row += 2
         elif states[i] == SEPARATED:
             for a in range(3):
-                ka = 3 * i + a
+                Ka = Kn[3 * i + a]
                 for col in range(m):
-                    J[row, col] = Kn[ka, idx[col]]
-                h[row] = -rb[ka]
+                    J[row, col] = Ka[idx[col]] * cs[col]
+                h[row] = -rb[3 * i + a]
                 row += 1
-    # scale rows and columns to unit diagonal magnitude before pivoting (any units)
-    cs = np.empty(m)
+    x0 = np.empty(m)
     for col in range(m):
-        cs[col] = 1.0 / np.sqrt(max(abs(Kn[idx[col], idx[col]]), 1e-300))
-    for a in range(m):
-        for col in range(m):
-            J[a, col] *= cs[col]
-    x = _linear_solve(J, h, states, n, dense_max)
+        x0[col] = u[idx[col]] / cs[col]
+    x = _linear_solve(J, h, states, n, dense_max, x0, eta)
     for col in range(m):
         v = x[col] * cs[col]
         if not np.isfinite(v):
@@ -166,7 +169,7 @@ def _newton_point(Kn, rb, sx, sy, g, rhoT, states, nhat, cfac, unew, dense_max):
 
 @njit(cache=True)
 def newton(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, dense_max=DENSE_MAX,
-           slack=0.0):
+           slack=0.0, scale=0.0):
     """Semismooth Newton on the Alart-Curnier equations from the guess ``u`` (in place).
 
     Parameters
@@ -190,6 +193,11 @@ def newton(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, dense_max
         Reduced systems up to this size by LU, larger ones by GMRES first.
     slack : float
         Stick acceptance beyond the cone [force] (see :func:`_classify`).
+    scale : float
+        Force scale of the step [force]: with ``scale > 0`` the iterative linear solves of large
+        reduced systems are inexact, to the relative residual ``eta = max(min(1e-2, res /
+        scale), 0.1 tol / res)`` (``res = max |phi|``: quadratic convergence is kept, and no
+        solve goes below a tenth of ``tol``); ``0``: exact solves.
 
     Returns
     -------
@@ -216,7 +224,10 @@ def newton(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, dense_max
         if np.max(np.abs(phi)) <= tol:
             return CONVERGED, it, np.max(np.abs(phi))
         it += 1
-        if not _newton_point(Kn, rb, sx, sy, g, rhoT, states, nhat, cfac, unew, dense_max):
+        res = np.max(np.abs(phi))
+        eta = max(min(1e-2, res / scale), 0.1 * tol / res) if scale > 0.0 else 0.0
+        if not _newton_point(Kn, rb, sx, sy, g, rhoT, states, nhat, cfac, unew, dense_max, u,
+                             eta):
             return SINGULAR, it, np.max(np.abs(phi))
         for k in range(3 * n):  # the Newton direction and its reactions, once
             unew[k] -= u[k]

@@ -9,16 +9,18 @@ from .cone_states import SEPARATED, SLIP
 from .kernel_jit import njit
 
 #: Reduced systems up to this size are solved by LU; larger ones by GMRES first (below).
-DENSE_MAX = 300
+DENSE_MAX = 64
 
 
 @njit(cache=True)
-def _linear_solve(J, h, states, n, dense_max):
+def _linear_solve(J, h, states, n, dense_max, x0, eta):
     """``J x = h``: LU with partial pivoting for ``m <= DENSE_MAX``, else restarted GMRES
-    preconditioned by the inverses of ``J``'s node blocks (2 x 2 slip, 3 x 3 separated), to a
-    relative residual of 1e-14, with LU when it does not get there in 120 iterations (a
-    ``O(m^2)``-per-iteration path for the large, well-conditioned systems where the LU's
-    ``O(m^3)`` dominates the step)."""
+    preconditioned by the inverses of ``J``'s node blocks (2 x 2 slip, 3 x 3 separated) started
+    from ``x0`` (the current Newton point: the answer of a warm start is near it), to a residual
+    ``|h - J x| <= max(1e-14 |h|, eta |h - J x0|)`` (``eta``: the forcing term of the inexact
+    Newton method, ``0`` for an exact solve), with LU when it does not get there in 120
+    iterations (a ``O(m^2)``-per-iteration path for the large, well-conditioned systems where the
+    LU's ``O(m^3)`` dominates the step)."""
     m = h.size
     if m <= dense_max:
         return np.linalg.solve(J, h)
@@ -40,9 +42,11 @@ def _linear_solve(J, h, states, n, dense_max):
             for c in range(a1 - a0):
                 Pinv[a0 + a, c] = blk[a, c]
     hn = np.sqrt(np.sum(h * h))
-    x = np.zeros(m)
+    x = x0.copy()
     if hn == 0.0:
-        return x
+        return np.zeros(m)
+    r0 = h - J @ x
+    target = max(1e-14 * hn, eta * np.sqrt(np.sum(r0 * r0)))
     restart = 40
     V = np.empty((restart + 1, m))
     H = np.zeros((restart + 1, restart))
@@ -54,7 +58,7 @@ def _linear_solve(J, h, states, n, dense_max):
     while total < 120:
         rres = h - J @ x
         beta = np.sqrt(np.sum(rres * rres))
-        if beta <= 1e-14 * hn:
+        if beta <= target:
             return x
         V[0] = rres / beta
         g[:] = 0.0
@@ -87,7 +91,7 @@ def _linear_solve(J, h, states, n, dense_max):
             g[k + 1] = -sn[k] * g[k]
             g[k] = cs[k] * g[k]
             k_used = k + 1
-            if abs(g[k + 1]) <= 1e-15 * hn or H[k, k] == 0.0:
+            if abs(g[k + 1]) <= 0.5 * target or H[k, k] == 0.0:
                 break
         y = np.zeros(k_used)
         for j in range(k_used - 1, -1, -1):
@@ -106,7 +110,7 @@ def _linear_solve(J, h, states, n, dense_max):
                     acc += Pinv[a0 + a, c] * upd[a0 + c]
                 x[a0 + a] += acc
     rres = h - J @ x
-    if np.sqrt(np.sum(rres * rres)) <= 1e-13 * hn:
+    if np.sqrt(np.sum(rres * rres)) <= 10.0 * target:
         return x
     return np.linalg.solve(J, h)
 

@@ -227,7 +227,7 @@ class ConeStepSolver:
         for name, guess in tries:
             u = np.zeros(3 * n) if guess is None else np.array(guess, float).ravel()
             code, it, _ = ck.newton(d.Kn, rbf, d.sx, d.sy, d.g, self.rhoT, self.rhoN, u, r, st,
-                                    tol, self.max_iter, self.dense_max, slack)
+                                    tol, self.max_iter, self.dense_max, slack, F)
             iters += it
             res = self._verify(rbf, u, r, F, equilibrium)
             if best is None or res.worst < best[3].worst:

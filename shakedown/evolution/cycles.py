@@ -81,7 +81,7 @@ def solve_cycles(system: DiscreteSystem, load: LoadCycle, lam: float, initial_sl
                  initial_gap=None, method: str = "implicit", steps_per_cycle: int = 200,
                  max_cycles: int = 200, tol: float = 1e-10, *, progress=None,
                  record_history: bool = False, solver: StepSolver | None = None,
-                 feas_tol: float | None = None) -> CycleRun:
+                 feas_tol: float | None = None, anderson_memory: int = 0) -> CycleRun:
     """Simulate load periods until the response is periodic (MODEL.md s.4).
 
     Parameters
@@ -122,6 +122,10 @@ def solve_cycles(system: DiscreteSystem, load: LoadCycle, lam: float, initial_sl
         process did before (the cache decides between an LU solve and a low-rank update).
     feas_tol : float, optional
         Feasibility tolerance of the steps (default :data:`FEAS_TOL`; builds a new solver).
+    anderson_memory : int
+        ``dim = 3`` only: periods remembered by the steady-state accelerator of
+        :mod:`.cone_cycles` (Anderson mixing of the period starts; the steady test is unchanged).
+        ``0`` (default): plain cycling.  For 2-D, use :func:`shakedown.steady_cycle`.
 
     Returns
     -------
@@ -147,7 +151,11 @@ def solve_cycles(system: DiscreteSystem, load: LoadCycle, lam: float, initial_sl
 
         return solve_cycles_3d(system, load, lam, initial_slip, initial_gap, method,
                                steps_per_cycle, max_cycles, tol, progress=progress,
-                               record_history=record_history, solver=solver, feas_tol=feas_tol)
+                               record_history=record_history, solver=solver, feas_tol=feas_tol,
+                               anderson_memory=anderson_memory)
+    if anderson_memory != 0:
+        raise InputError(f"anderson_memory={anderson_memory!r} is for dim = 3 systems; for a 2-D "
+                         "system use shakedown.steady_cycle(..., accelerator='anderson')")
     lam, V0, W0, n_steps, max_cycles, tol, batch = _check_inputs(
         system, load, lam, initial_slip, initial_gap, method, steps_per_cycle, max_cycles, tol)
     if solver is None:

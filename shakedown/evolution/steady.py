@@ -32,9 +32,9 @@ import numpy as np
 from ..model.errors import InputError
 from ..model.results import short_repr
 from ..model.validation import check_count, check_positive
+from .anderson import _anderson
 from .steady_maps import (
     FD_STEP,
-    _anderson,
     _check_common,
     _check_slip,
     _newton_step,

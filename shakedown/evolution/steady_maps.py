@@ -183,11 +183,3 @@ def _newton_step(P, x, y, p, h, scale):
     return x + dx, rho
 
 
-def _anderson(X, G, y):
-    """Anderson (type II) update from iterates ``X`` and residuals ``G = P(X) - X``."""
-    if len(X) < 2:
-        return y
-    dG = np.diff(np.array(G), axis=0).T  # (n, m)
-    dX = np.diff(np.array(X), axis=0).T
-    gamma = np.linalg.lstsq(dG, G[-1], rcond=1e-12)[0]
-    return y - (dX + dG) @ gamma

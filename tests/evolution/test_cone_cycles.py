@@ -214,3 +214,45 @@ def test_bad_input_is_refused_by_name():
     load2 = sd.LoadCycle.from_harmonics(q0=[0.0], p0=[1.0], q_cos=[1.0])
     with pytest.raises(ShapeError, match="dim"):
         sd.solve_cycles(s, load2, 1.0)
+    with pytest.raises(InputError, match="anderson_memory"):
+        sd.solve_cycles(s, load, 1.0, anderson_memory=-1)
+    with pytest.raises(InputError, match="anderson_memory"):
+        sd.solve_cycles(s, load, 1.0, anderson_memory=2.5)
+    s2 = sd.DiscreteSystem([[1.0]], [[0.0]], [[1.0]], friction=0.5)
+    with pytest.raises(InputError, match="steady_cycle"):
+        sd.solve_cycles(s2, load2, 1.0, anderson_memory=3)
+
+
+def slow_coupled_3d(n=6, seed=1):
+    """A random coupled system (``K = M M^T / 3N + I``, ``B = 0.4 x`` its coupling block,
+    ``f = 0.3``, harmonic load with independent cosine and sine parts) whose approach to the
+    steady cycle is slow at ``lam = 0.5`` (about 80 plain periods at 32 steps)."""
+    rng = np.random.default_rng(seed)
+    M = rng.normal(size=(3 * n, 3 * n))
+    K = (M @ M.T) / (3 * n) + np.eye(3 * n)
+    s = sd.DiscreteSystem(K[:2 * n, :2 * n], 0.4 * K[:2 * n, 2 * n:], K[2 * n:, 2 * n:],
+                          friction=0.3, dim=3)
+    load = sd.LoadCycle.from_harmonics(q0=0.1 * rng.normal(size=(n, 2)), p0=np.ones(n),
+                                       q_cos=rng.normal(size=(n, 2)),
+                                       q_sin=rng.normal(size=(n, 2)))
+    return s, load
+
+
+def test_anderson_accelerator_reaches_the_plain_steady_cycle_in_fewer_periods():
+    """The opt-in accelerator of the 3-D driver: the same steady cycle as plain cycling (no node
+    stays stuck here, so the steady state is unique), to the steady test's tolerance, verified by
+    a simulated steady period, in a fraction of the periods."""
+    s, load = slow_coupled_3d()
+    plain = sd.solve_cycles(s, load, 0.5, steps_per_cycle=32)
+    fast = sd.solve_cycles(s, load, 0.5, steps_per_cycle=32, anderson_memory=5)
+    assert plain.status == fast.status == "periodic" and plain.stuck_nodes.size == 0
+    assert fast.n_cycles * 3 <= plain.n_cycles
+    F = plain.force_scale
+    k = np.diag(s.A).max()
+    assert abs(fast.steady_dissipation - plain.steady_dissipation) <= 1e-8 * F * F / k
+    np.testing.assert_allclose(fast.final_slip, plain.final_slip, rtol=0, atol=1e-8 * F / k)
+    np.testing.assert_allclose(fast.steady_orbit[-1].q, plain.steady_orbit[-1].q, rtol=0,
+                               atol=1e-8 * F)
+    assert fast.state_change[-1] <= fast.tol and fast.cycle_start_slips.shape == (
+        fast.n_cycles + 1, 6, 2)
+    assert fast.energy_identity.discrete_relative_difference <= 1e-9

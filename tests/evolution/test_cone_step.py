@@ -166,6 +166,15 @@ def test_gmres_and_lu_paths_agree():
     b = ConeStepSolver(s, dense_max=4).solve(v, q_w, p_w)
     assert a.success and b.success
     np.testing.assert_allclose(a.q, b.q, rtol=0, atol=1e-10 * a.force_scale)
+    # warm-started (the inexact GMRES starts from the guess): a guess near the answer, and one
+    # far from it, reach the same verified answer
+    for scale in (1e-4, 1.0):
+        rng = np.random.default_rng(1)
+        guess = np.column_stack([a.slip_increment, a.gap])
+        guess = guess + scale * np.abs(guess).max() * rng.normal(size=guess.shape)
+        c = ConeStepSolver(s, dense_max=4).solve(v, q_w, p_w, guess=guess)
+        assert c.success and c.method == "newton"
+        np.testing.assert_allclose(c.q, a.q, rtol=0, atol=1e-10 * a.force_scale)
 
 
 @settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.too_slow])
