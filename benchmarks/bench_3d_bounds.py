@@ -11,7 +11,7 @@ pinned by the caller's environment), so its peak memory (``ru_maxrss``) is its o
 load average (1 min) recorded with each row.
 
     OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 python3 benchmarks/bench_3d_bounds.py 100 200 \
-        --seeds 0 1 2 --solvers auto clarabel --out benchmarks/bounds_3d_dense_speed.json
+        --seeds 0 1 2 --solvers dense clarabel --out benchmarks/bounds_3d_dense_speed.json
 
 ``--sampled S`` adds the plain sampled SOCP (Clarabel, ``S`` equally spaced times, no
 certificate) of the earlier version of this benchmark.
@@ -85,7 +85,7 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("sizes", type=int, nargs="*")
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
-    ap.add_argument("--solvers", nargs="+", default=["auto", "clarabel"])
+    ap.add_argument("--solvers", nargs="+", default=["dense", "clarabel"])
     ap.add_argument("--sampled", type=int, nargs="*", default=[])
     ap.add_argument("--timeout", type=float, default=3600.0)
     ap.add_argument("--out", default="benchmarks/bounds_3d_dense_speed.json")

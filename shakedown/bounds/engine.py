@@ -96,18 +96,19 @@ def shakedown_bounds(
     facets : int, optional
         3-D only (``system.dim == 3``): facets ``k`` per node of the inscribed polygons of the
         polyhedral lower-bound candidates (default 8).
-    solver : {"auto", "highs", "clarabel"}
-        3-D (``system.dim == 3``): ``"auto"`` solves the SOCPs of ``lam2`` by the dense interior
+    solver : {"auto", "highs", "dense", "clarabel"}
+        3-D (``system.dim == 3``): ``"dense"`` solves the SOCPs of ``lam2`` by the dense interior
         point (every answer checked, Clarabel where a check fails; recorded in
         ``ConeBounds.socp_paths``), ``"clarabel"`` (or ``"highs"``, the reference path) by
-        Clarabel only.  2-D: ``"auto"``: dense interior point + basis identification for the
-        ``lam2`` LP, then the lock-step dense dual simplex of :mod:`shakedown.bounds.dense_lp`
-        warm-started from the optimal basis for the activity-interval and adjacency LPs; every
-        answer is certified by its optimality conditions and any LP that is not certified is
-        re-solved by HiGHS. ``"highs"``: every LP by HiGHS (one model, warm starts): the
-        reference.  A sparse system (``system.is_sparse``) always takes the HiGHS path on its
-        sparse constraint matrix (``intervals="lam1"``: shared vertices and incumbent pruning,
-        :mod:`shakedown.bounds.highs_pruning`); nothing is densified.  An uncondensed FE system
+        Clarabel only, ``"auto"`` takes ``"dense"`` from 150 nodes on.  2-D: ``"auto"``: dense
+        interior point + basis identification for the ``lam2`` LP, then the lock-step dense dual
+        simplex of :mod:`shakedown.bounds.dense_lp` warm-started from the optimal basis for the
+        activity-interval and adjacency LPs; every answer is certified by its optimality
+        conditions and any LP that is not certified is re-solved by HiGHS. ``"highs"``: every LP
+        by HiGHS (one model, warm starts): the reference.  A sparse system (``system.is_sparse``)
+        always takes the HiGHS path on its sparse constraint matrix (``intervals="lam1"``: shared
+        vertices and incumbent pruning, :mod:`shakedown.bounds.highs_pruning`); nothing is
+        densified.  An uncondensed FE system
         (:class:`~shakedown.model.uncondensed.UncondensedSystem`) has dense constraint rows ``A
         -/+ F B^T`` (a Schur complement): they are formed by ``N`` sparse solves (never all of
         ``K``) and take the dense path.

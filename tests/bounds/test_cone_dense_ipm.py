@@ -12,6 +12,8 @@ are recorded and the answer is the same.
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import shakedown as sd
 from shakedown.bounds.cones.certify import check_dual_bound, check_safe_state
@@ -70,7 +72,7 @@ def test_dense_relaxation_matches_clarabel_and_its_multipliers_certify(seed):
     d = cone_data(random_3d(n, seed), random_load(n, 100 + seed))
     nodes, times = initial_cuts(d, 8)
     ref = solve_cuts(d, nodes, times)
-    u0, tau0 = margin_state(d, solver="auto", log=SocpLog())
+    u0, tau0 = margin_state(d, solver="dense", log=SocpLog())
     assert tau0 > 0
     a1, b1 = d.periodic(times, nodes)
     ans = solve_dense(d.E, nodes, a1, b1, d.a0, d.b0, u0=u0)
@@ -85,7 +87,7 @@ def test_check_of_a_dense_answer_refuses_wrong_answers():
     n = 8
     d = cone_data(random_3d(n, 3), random_load(n, 4))
     nodes, times = initial_cuts(d, 8)
-    u0, _ = margin_state(d, solver="auto", log=SocpLog())
+    u0, _ = margin_state(d, solver="dense", log=SocpLog())
     a1, b1 = d.periodic(times, nodes)
     ans = solve_dense(d.E, nodes, a1, b1, d.a0, d.b0, u0=u0)
     assert check_round(d, nodes, times, ans, dual_tol=1e-6)[0] is None
@@ -118,10 +120,10 @@ def test_check_of_a_dense_answer_refuses_wrong_answers():
     assert why is not None
 
 
-def test_default_path_is_dense_certified_and_equals_the_clarabel_path():
+def test_dense_path_is_certified_and_equals_the_clarabel_path():
     n = 10
     s, load = random_3d(n, 5), random_load(n, 6)
-    fast = sd.shakedown_bounds(s, load, only=("lam2",))
+    fast = sd.shakedown_bounds(s, load, only=("lam2",), solver="dense")
     ref = sd.shakedown_bounds(s, load, only=("lam2",), solver="clarabel")
     assert fast.status == ref.status == "bounded"
     assert fast.path == "dense" and set(fast.socp_paths) == {"dense"} and not fast.fallbacks
@@ -150,7 +152,7 @@ def test_forced_failure_of_the_dense_path_falls_back_to_clarabel_with_the_same_a
 
     from shakedown.bounds.cones.engine import cone_bounds
 
-    fb = cone_bounds(s, load, only=("lam2",), _fail=broken)
+    fb = cone_bounds(s, load, only=("lam2",), solver="dense", _fail=broken)
     rounds = fb.n_socps
     # the static-margin SOCP checks its state only (its margin is recomputed): still dense
     assert fb.socp_paths[0] == "dense" and set(fb.socp_paths[1:]) == {"clarabel"}
@@ -164,7 +166,7 @@ def test_forced_failure_of_the_dense_path_falls_back_to_clarabel_with_the_same_a
     def failed(ans):
         return CutAnswer("failed", ans.lam, ans.u, ans.z, ans.y_cap, ans.iterations)
 
-    fb2 = cone_bounds(s, load, only=("lam2",), _fail=failed)
+    fb2 = cone_bounds(s, load, only=("lam2",), solver="dense", _fail=failed)
     assert fb2.path == "clarabel" and "no positive static margin" in fb2.fallbacks[0]
     np.testing.assert_allclose(fb2.lam2, ref.lam2, rtol=1e-6)
 
@@ -175,3 +177,29 @@ def test_solver_names_are_checked():
         sd.shakedown_bounds(s, load, only=("lam2",), solver="mosek")
     b = sd.shakedown_bounds(s, load, only=("lam2",), solver="highs")  # the reference: Clarabel
     assert b.path == "clarabel"
+    # "auto" keeps Clarabel below DENSE_MIN_NODES (faster there) and for uncoupled systems
+    assert sd.shakedown_bounds(s, load, only=("lam2",)).path == "clarabel"
+    from shakedown.bounds.cones.rounds import DENSE_MIN_NODES, resolve_solver
+
+    d = cone_data(random_3d(2, 9), random_load(2, 10))
+    assert resolve_solver("dense", d) == "dense" and resolve_solver("auto", d) == "clarabel"
+    big = d.__class__(**{**d.__dict__, "a0": np.zeros((DENSE_MIN_NODES, 2))})
+    assert resolve_solver("auto", big) == "dense"
+    unc = d.__class__(**{**d.__dict__, "E": None})
+    assert resolve_solver("dense", unc) == "clarabel"
+
+
+@settings(max_examples=4, deadline=None)
+@given(force=st.floats(1e-6, 1e12), stiff=st.floats(1e-6, 1e12), amp=st.floats(1e-6, 1e12))
+def test_dense_path_does_not_depend_on_units(force, stiff, amp):
+    s, load = random_3d(4, 11), random_load(4, 12)
+    ref = sd.shakedown_bounds(s, load, only=("lam2",), solver="dense")
+    s2 = sd.DiscreteSystem(stiff * s.A, stiff * s.B, stiff * s.C, friction=s.friction, dim=3)
+    l2 = sd.LoadCycle.from_harmonics(
+        q0=force * load.q0, p0=force * load.p0, q_cos=force * amp * load.q_cos,
+        q_sin=force * amp * load.q_sin, p_cos=force * amp * load.p_cos,
+        p_sin=force * amp * load.p_sin)
+    b = sd.shakedown_bounds(s2, l2, only=("lam2",), solver="dense")
+    assert b.path == ref.path == "dense"
+    np.testing.assert_allclose(b.lam2 * amp, ref.lam2, rtol=1e-7)
+    np.testing.assert_allclose(b.lam2_upper * amp, ref.lam2_upper, rtol=1e-7)

@@ -48,10 +48,11 @@ def cone_bounds(system, load, *, lam=None, only=None, facets=None, intervals="la
         Relative width of the certified bracket of ``lam2``.
     max_rounds : int
         Most SOCP solves of the cutting-plane loop.
-    solver : {"auto", "clarabel"}
-        ``"auto"``: the SOCPs of a coupled system by the dense interior point, each answer
+    solver : {"auto", "dense", "clarabel"}
+        ``"dense"``: the SOCPs of a coupled system by the dense interior point, each answer
         checked by its own conditions, Clarabel where a check fails (:mod:`.rounds`; recorded
-        in ``socp_paths`` / ``fallbacks``); ``"clarabel"``: Clarabel only.
+        in ``socp_paths`` / ``fallbacks``); ``"clarabel"``: Clarabel only; ``"auto"``:
+        ``"dense"`` from :data:`.rounds.DENSE_MIN_NODES` (150) nodes on, where it is faster.
     _fail : callable, optional
         Test hook applied to every dense answer before its check (forces the fallback).
 

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .rounds import SocpLog, active_cuts, margin_state, solve_round
+from .rounds import SocpLog, active_cuts, margin_state, resolve_solver, solve_round
 from .separation import worst_times
 from .socp import LAM_CAP, dual_bound, solve_cuts
 
@@ -90,22 +90,25 @@ def melan_lam2(data, *, rtol=BRACKET_RTOL, max_rounds=60, cuts=None, solver="aut
         SOCP solves at most; the bracket reached is returned with status ``"bracket"``.
     cuts : tuple of (nodes, times), optional
         Starting cuts (default :func:`initial_cuts`).
-    solver : {"auto", "clarabel"}
-        ``"auto"``: every SOCP of a coupled system by the dense interior point (checked;
+    solver : {"auto", "dense", "clarabel"}
+        ``"dense"``: every SOCP of a coupled system by the dense interior point (checked;
         Clarabel where the check fails or where its bound is too loose to close the bracket),
         and each round re-solves only the cuts that carry the last relaxation plus the new
         worst times (:func:`.rounds.active_cuts`); ``"clarabel"``: every SOCP by Clarabel on
-        the growing set of cuts.  Uncoupled systems always use Clarabel (their SOCP is sparse).
+        the growing set of cuts; ``"auto"``: ``"dense"`` from
+        :data:`.rounds.DENSE_MIN_NODES` nodes on.  Uncoupled systems always use Clarabel
+        (their SOCP is sparse).
     fail : callable, optional
         Test hook passed to :func:`.rounds.solve_round`.
     """
     nodes, times = initial_cuts(data) if cuts is None else (np.asarray(cuts[0]),
                                                             np.asarray(cuts[1], float))
     log = SocpLog()
+    solver = resolve_solver(solver, data)
     u0, tau0 = margin_state(data, solver=solver, log=log, fail=fail)
     out = MelanOutcome("bounded", 0.0, np.inf, u0, tau0, u0, 0.0, nodes, times, np.zeros((0, 3)),
                        u0=u0, tau0=tau0, log=log)
-    dense = solver == "auto" and data.coupled
+    dense = solver == "dense"
     start = (u0, 0.0)
     if not tau0 > 0:
         out.status = "infeasible"
@@ -208,7 +211,7 @@ def _tighten(data, nodes, times, ans, start, log, fail):
     sn, st = active_cuts(nodes, times, ans.z, np.zeros(0, int), np.zeros(0))
     if sn.size >= nodes.size:
         return cert, None
-    a2, b2 = solve_round(data, sn, st, solver="auto", start=start, dual_tol=DUAL_TOL, log=log,
+    a2, b2 = solve_round(data, sn, st, solver="dense", start=start, dual_tol=DUAL_TOL, log=log,
                          fail=fail)
     if a2.status != "optimal":
         return cert, a2

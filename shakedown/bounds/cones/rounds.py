@@ -29,7 +29,10 @@ PRIMAL_TOL = 1e-7
 #: largest one.
 ACTIVE_REL = 1e-7
 
-SOLVERS = ("auto", "clarabel")
+SOLVERS = ("auto", "dense", "clarabel")
+#: ``solver="auto"`` takes the dense path from this many nodes on (coupled systems): below it
+#: Clarabel's sparse factorisation is as fast (measured: ``benchmarks/RESULTS_3d_bounds.md``).
+DENSE_MIN_NODES = 150
 
 
 @dataclass
@@ -64,7 +67,17 @@ def check_solver(solver):
 
     if solver not in SOLVERS:
         raise InputError(f"solver must be one of {SOLVERS} for a 3-D system; got {solver!r} "
-                         "('auto': the dense interior point, checked, Clarabel where it fails)")
+                         "('dense': the dense interior point, checked, Clarabel where it fails; "
+                         f"'auto': dense from {DENSE_MIN_NODES} nodes on)")
+
+
+def resolve_solver(solver, data) -> str:
+    """``"dense"`` or ``"clarabel"``: the path of a coupled system of ``N`` nodes (uncoupled
+    systems always take Clarabel: their SOCP is sparse)."""
+    check_solver(solver)
+    if not data.coupled or solver == "clarabel":
+        return "clarabel"
+    return "dense" if solver == "dense" or data.n_nodes >= DENSE_MIN_NODES else "clarabel"
 
 
 def _cut_violation(data, nodes, times, u, lam):
@@ -107,7 +120,7 @@ def solve_round(data, nodes, times, *, solver, start, dual_tol, log, fail=None):
     bound : tuple (hi, residuals) or None
         The bound of the accepted dense answer (``None`` after Clarabel: the caller computes it).
     """
-    if solver == "auto" and data.coupled:
+    if solver == "dense" and data.coupled:
         a1, b1 = data.periodic(times, nodes)
         ans = solve_dense(data.E, nodes, a1, b1, data.a0, data.b0, u0=start[0], lam0=start[1])
         if fail is not None:
@@ -129,7 +142,7 @@ def margin_state(data, *, solver, log, fail=None):
     """:func:`.socp.static_margin` (the state farthest inside every cone at ``lam = 0``) by the
     dense interior point when it gives a positive margin, else by Clarabel.  The margin is
     recomputed from the state in both cases, so the path does not matter for correctness."""
-    if solver == "auto" and data.coupled:
+    if solver == "dense" and data.coupled:
         n = data.n_nodes
         nodes = np.arange(n)
         u = -data.a0
