@@ -203,3 +203,19 @@ def test_dense_path_does_not_depend_on_units(force, stiff, amp):
     assert b.path == ref.path == "dense"
     np.testing.assert_allclose(b.lam2 * amp, ref.lam2, rtol=1e-7)
     np.testing.assert_allclose(b.lam2_upper * amp, ref.lam2_upper, rtol=1e-7)
+
+
+def test_a_tight_bracket_is_reached_through_the_fallback_and_agrees_with_clarabel():
+    """rtol = 1e-8 is below what the dense interior point's multipliers can close: the rounds
+    that would close it are re-solved (active cuts, then Clarabel), and the answer agrees with
+    the Clarabel path to the brackets' width."""
+    from shakedown.bounds.cones.engine import cone_bounds
+
+    s, load = random_3d(8, 13), random_load(8, 14)
+    fast = cone_bounds(s, load, only=("lam2",), solver="dense", rtol=1e-8)
+    ref = cone_bounds(s, load, only=("lam2",), solver="clarabel", rtol=1e-8)
+    assert fast.status == "bounded" and fast.lam2_upper - fast.lam2_lower <= 1e-8 * fast.lam2_upper
+    assert max(fast.lam2_lower, ref.lam2_lower) <= min(fast.lam2_upper, ref.lam2_upper)
+    np.testing.assert_allclose(fast.lam2, ref.lam2, rtol=3e-8)
+    assert check_dual_bound(s, load, fast.certificate, fast.lam2_upper)[0]
+    assert check_safe_state(s, load, fast.state_at_lam2, fast.lam2)[0]
