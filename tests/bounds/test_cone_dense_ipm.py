@@ -189,7 +189,7 @@ def test_solver_names_are_checked():
     assert resolve_solver("dense", unc) == "clarabel"
 
 
-@settings(max_examples=4, deadline=None)
+@settings(max_examples=3, deadline=None)
 @given(force=st.floats(1e-6, 1e12), stiff=st.floats(1e-6, 1e12), amp=st.floats(1e-6, 1e12))
 def test_dense_path_does_not_depend_on_units(force, stiff, amp):
     s, load = random_3d(4, 11), random_load(4, 12)
