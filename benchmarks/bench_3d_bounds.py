@@ -3,8 +3,9 @@
 For random coupled systems (dense K, isotropic f = 0.4, one harmonic, tangential load rotating
 elliptically, normal load varying) at each N: the certified cutting-plane lam2
 (``sd.shakedown_bounds(..., only=("lam2",), solver=S)``, bracket to the default rtol = 1e-6)
-with ``S = "auto"`` (the dense interior point, :mod:`shakedown.bounds.cones.dense_ipm`, each
-answer checked, Clarabel where a check fails) and ``S = "clarabel"`` (the path before this
+with ``S = "dense"`` (the dense interior point, :mod:`shakedown.bounds.cones.dense_ipm`, each
+answer checked, Clarabel where a check fails; ``"auto"`` takes it from 150 nodes on) and
+``S = "clarabel"`` (the path before this
 change: every SOCP by Clarabel).  Each measurement runs in its own process (one thread, BLAS
 pinned by the caller's environment), so its peak memory (``ru_maxrss``) is its own; CPU time
 (``time.process_time``) is the one-core figure on a loaded machine, wall time beside it, the
