@@ -1,13 +1,21 @@
-"""Speed of the 3-D lam2 (cone engine) against a plain sampled SOCP, side by side in one run.
+"""Speed of the certified 3-D lam2: the dense interior point path against the Clarabel path.
 
 For random coupled systems (dense K, isotropic f = 0.4, one harmonic, tangential load rotating
 elliptically, normal load varying) at each N: the certified cutting-plane lam2
-(``sd.shakedown_bounds(..., only=("lam2",))``, bracket to 1e-7) and the baseline, one Clarabel
-SOCP with the cones of every node at S equally spaced times (S = 16, 64), which over-estimates
-lam2 (a relaxation) and certifies nothing about the times in between.  Medians of REPEATS
-timings per system, several systems per N, the worst case beside the median.
+(``sd.shakedown_bounds(..., only=("lam2",), solver=S)``, bracket to the default rtol = 1e-6)
+with ``S = "dense"`` (the dense interior point, :mod:`shakedown.bounds.cones.dense_ipm`, each
+answer checked, Clarabel where a check fails; ``"auto"`` takes it from 150 nodes on) and
+``S = "clarabel"`` (the path before this
+change: every SOCP by Clarabel).  Each measurement runs in its own process (one thread, BLAS
+pinned by the caller's environment), so its peak memory (``ru_maxrss``) is its own; CPU time
+(``time.process_time``) is the one-core figure on a loaded machine, wall time beside it, the
+load average (1 min) recorded with each row.
 
-    OPENBLAS_NUM_THREADS=1 python3 benchmarks/bench_3d_bounds.py 50 100 200 [--repeats 3]
+    OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 python3 benchmarks/bench_3d_bounds.py 100 200 \
+        --seeds 0 1 2 --solvers dense clarabel --out benchmarks/bounds_3d_dense_speed.json
+
+``--sampled S`` adds the plain sampled SOCP (Clarabel, ``S`` equally spaced times, no
+certificate) of the earlier version of this benchmark.
 """
 
 from __future__ import annotations
@@ -15,13 +23,18 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
+import subprocess
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
-import shakedown as sd
-from shakedown.bounds.cones.data import cone_data
-from shakedown.bounds.cones.socp import solve_cuts
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # this repository's package
+import shakedown as sd  # noqa: E402
+from shakedown.bounds.cones.data import cone_data  # noqa: E402
+from shakedown.bounds.cones.socp import solve_cuts  # noqa: E402
 
 
 def random_3d(n, seed):
@@ -48,39 +61,62 @@ def sampled(system, load, S):
     return ans.lam * d.load_factor
 
 
-def timed(fn, repeats):
-    ts, val = [], None
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        val = fn()
-        ts.append(time.perf_counter() - t0)
-    return float(np.median(ts)), val
+def one(n, seed, solver):
+    """One measurement in this process; prints a JSON row."""
+    s, load = random_3d(n, seed), random_load(n, 1000 + seed)
+    rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    t0, c0 = time.perf_counter(), time.process_time()
+    if solver.startswith("sampled"):
+        val = sampled(s, load, int(solver[7:]))
+        row = dict(lam=val)
+    else:
+        b = sd.shakedown_bounds(s, load, only=("lam2",), solver=solver)
+        row = dict(lam2=b.lam2, lam2_lower=b.lam2_lower, lam2_upper=b.lam2_upper,
+                   width=(b.lam2_upper - b.lam2_lower) / b.lam2_upper, status=b.status,
+                   socps=b.n_socps, cuts=b.n_cuts, iterations=b.iterations, path=b.path,
+                   paths=list(b.socp_paths), fallbacks=list(b.fallbacks))
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    row.update(N=n, seed=seed, solver=solver, wall=wall, cpu=cpu, peak_rss_mb=rss / 1024,
+               setup_rss_mb=rss0 / 1024, load=os.getloadavg()[0])
+    print(json.dumps(row), flush=True)
 
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("sizes", type=int, nargs="+")
-    ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--systems", type=int, default=3)
-    ap.add_argument("--out", default="benchmarks/bounds_3d_speed.json")
+    ap.add_argument("sizes", type=int, nargs="*")
+    ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
+    ap.add_argument("--solvers", nargs="+", default=["dense", "clarabel"])
+    ap.add_argument("--sampled", type=int, nargs="*", default=[])
+    ap.add_argument("--timeout", type=float, default=3600.0)
+    ap.add_argument("--out", default="benchmarks/bounds_3d_dense_speed.json")
+    ap.add_argument("--one", nargs=3, metavar=("N", "SEED", "SOLVER"), help=argparse.SUPPRESS)
     a = ap.parse_args()
+    if a.one:
+        one(int(a.one[0]), int(a.one[1]), a.one[2])
+        return
     rows = []
-    print("load:", os.getloadavg())
+    if os.path.exists(a.out):
+        with open(a.out) as fh:
+            rows = json.load(fh)
+    solvers = list(a.solvers) + [f"sampled{S}" for S in a.sampled]
     for n in a.sizes:
-        for k in range(a.systems):
-            s, load = random_3d(n, k), random_load(n, 1000 + k)
-            t_exact, b = timed(lambda s=s, load=load: sd.shakedown_bounds(s, load, only=("lam2",)),
-                               a.repeats)
-            t16, l16 = timed(lambda s=s, load=load: sampled(s, load, 16), a.repeats)
-            t64, l64 = timed(lambda s=s, load=load: sampled(s, load, 64), a.repeats)
-            row = dict(N=n, system=k, t_exact=t_exact, lam2=b.lam2, lam2_upper=b.lam2_upper,
-                       status=b.status, socps=b.n_socps, cuts=b.n_cuts, t_sampled16=t16,
-                       lam_sampled16=l16, t_sampled64=t64, lam_sampled64=l64,
-                       load=os.getloadavg()[0])
-            rows.append(row)
-            print(json.dumps(row), flush=True)
-            with open(a.out, "w") as fh:
-                json.dump(rows, fh, indent=1)
+        for seed in a.seeds:
+            for solver in solvers:
+                cmd = [sys.executable, __file__, "--one", str(n), str(seed), solver]
+                try:
+                    p = subprocess.run(cmd, capture_output=True, text=True, timeout=a.timeout)
+                    row = json.loads(p.stdout.strip().splitlines()[-1])
+                except subprocess.TimeoutExpired:
+                    row = dict(N=n, seed=seed, solver=solver, status="timeout",
+                               wall=a.timeout, load=os.getloadavg()[0])
+                except (IndexError, json.JSONDecodeError):
+                    row = dict(N=n, seed=seed, solver=solver, status="error",
+                               stderr=p.stderr[-2000:])
+                rows.append(row)
+                print(json.dumps({k: v for k, v in row.items() if k != "paths"}), flush=True)
+                with open(a.out, "w") as fh:
+                    json.dump(rows, fh, indent=1)
 
 
 if __name__ == "__main__":

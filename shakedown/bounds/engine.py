@@ -96,18 +96,22 @@ def shakedown_bounds(
     facets : int, optional
         3-D only (``system.dim == 3``): facets ``k`` per node of the inscribed polygons of the
         polyhedral lower-bound candidates (default 8).
-    solver : {"auto", "highs"}
-        ``"auto"``: dense interior point + basis identification for the ``lam2`` LP, then the
-        lock-step dense dual simplex of :mod:`shakedown.bounds.dense_lp` warm-started from the
-        optimal basis for the activity-interval and adjacency LPs; every answer is certified by
-        its optimality conditions and any LP that is not certified is re-solved by HiGHS.
-        ``"highs"``: every LP by HiGHS (one model, warm starts): the reference.  A sparse system
-        (``system.is_sparse``) always takes the HiGHS path on its sparse constraint matrix
-        (``intervals="lam1"``: shared vertices and incumbent pruning,
-        :mod:`shakedown.bounds.highs_pruning`); nothing is densified.  An uncondensed FE
-        system (:class:`~shakedown.model.uncondensed.UncondensedSystem`) has dense constraint
-        rows ``A -/+ F B^T`` (a Schur complement): they are formed by ``N`` sparse solves (never
-        all of ``K``) and take the dense path.
+    solver : {"auto", "highs", "dense", "clarabel"}
+        3-D (``system.dim == 3``): ``"dense"`` solves the SOCPs of ``lam2`` by the dense interior
+        point (every answer checked, Clarabel where a check fails; recorded in
+        ``ConeBounds.socp_paths``), ``"clarabel"`` (or ``"highs"``, the reference path) by
+        Clarabel only, ``"auto"`` takes ``"dense"`` from 150 nodes on.  2-D: ``"auto"``: dense
+        interior point + basis identification for the ``lam2`` LP, then the lock-step dense dual
+        simplex of :mod:`shakedown.bounds.dense_lp` warm-started from the optimal basis for the
+        activity-interval and adjacency LPs; every answer is certified by its optimality
+        conditions and any LP that is not certified is re-solved by HiGHS. ``"highs"``: every LP
+        by HiGHS (one model, warm starts): the reference.  A sparse system (``system.is_sparse``)
+        always takes the HiGHS path on its sparse constraint matrix (``intervals="lam1"``: shared
+        vertices and incumbent pruning, :mod:`shakedown.bounds.highs_pruning`); nothing is
+        densified.  An uncondensed FE system
+        (:class:`~shakedown.model.uncondensed.UncondensedSystem`) has dense constraint rows ``A
+        -/+ F B^T`` (a Schur complement): they are formed by ``N`` sparse solves (never all of
+        ``K``) and take the dense path.
     progress : callable, optional
         ``progress(iterable, total=None, desc="")`` (:class:`~shakedown.model.progress.
         ProgressDisplay`, ``tqdm.tqdm``): one step per stage (``lam2`` LP, ``lam_low``,
@@ -118,7 +122,7 @@ def shakedown_bounds(
     circular (or elliptic) friction cones with a certified bracket, and with ``intervals`` /
     ``adjacency`` the polyhedral candidates ``lam1_cone`` / ``lam_adj_cone`` on inscribed
     ``facets``-gons; it returns a :class:`~shakedown.bounds.cones.result.ConeBounds`
-    (``separation`` and ``solver`` do not apply).  ``only=("lam2",)`` for large systems.
+    (``separation`` does not apply).  ``only=("lam2",)`` for large systems.
 
     Returns
     -------
@@ -142,7 +146,8 @@ def shakedown_bounds(
         check_same_dimension(system, load)  # a 2-D system with a 3-D load: named by the check
 
         return cone_bounds(system, load, lam=lam, only=only, facets=facets, intervals=intervals,
-                           adjacency=adjacency)
+                           adjacency=adjacency,
+                           solver="clarabel" if solver == "highs" else solver)
     if facets is not None:
         raise InputError(f"facets applies to three-dimensional systems only (system.dim = 3); "
                          f"got facets={facets!r} for a 2-D system: leave it out")

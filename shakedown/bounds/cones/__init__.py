@@ -6,6 +6,10 @@ Modules, in the order of the pipeline:
   coupling ``E = B^T A^-1 diag(f)``);
 * :mod:`.separation` -- every node's exact worst time (roots of a trigonometric polynomial);
 * :mod:`.socp` -- the relaxations on finite sets of cuts (Clarabel) and their dual bound;
+* :mod:`.dense_ipm` -- the same relaxations by a dense interior point on the ``2N + 1`` normal
+  equations (coupled systems; the default path);
+* :mod:`.rounds` -- one relaxation by the dense path, checked, Clarabel where the check fails,
+  and the record of which path answered each SOCP;
 * :mod:`.melan` -- ``lam2`` by cutting planes with a certified bracket;
 * :mod:`.certify` -- the certificates checked from scratch (safe state, dual bound);
 * :mod:`.polygon` -- the polyhedral candidates ``lam_adj_cone`` / ``lam1_cone`` on inscribed

@@ -17,13 +17,15 @@ from .certify import ConeCertificate, check_safe_state
 from .data import cone_data
 from .melan import BRACKET_RTOL, melan_lam2
 from .result import ConeBounds
+from .rounds import check_solver
 
 #: What ``only=`` may name in 3-D.
 QUANTITIES_3D = ("lam1", "lam2", "lam_adj", "lam_separation")
 
 
 def cone_bounds(system, load, *, lam=None, only=None, facets=None, intervals="lam1",
-                adjacency=False, rtol=BRACKET_RTOL, max_rounds=60) -> ConeBounds:
+                adjacency=False, rtol=BRACKET_RTOL, max_rounds=60, solver="auto",
+                _fail=None) -> ConeBounds:
     """3-D shakedown load factors with certificates (MODEL.md s.8.3).
 
     Parameters
@@ -46,6 +48,13 @@ def cone_bounds(system, load, *, lam=None, only=None, facets=None, intervals="la
         Relative width of the certified bracket of ``lam2``.
     max_rounds : int
         Most SOCP solves of the cutting-plane loop.
+    solver : {"auto", "dense", "clarabel"}
+        ``"dense"``: the SOCPs of a coupled system by the dense interior point, each answer
+        checked by its own conditions, Clarabel where a check fails (:mod:`.rounds`; recorded
+        in ``socp_paths`` / ``fallbacks``); ``"clarabel"``: Clarabel only; ``"auto"``:
+        ``"dense"`` from :data:`.rounds.DENSE_MIN_NODES` (150) nodes on, where it is faster.
+    _fail : callable, optional
+        Test hook applied to every dense answer before its check (forces the fallback).
 
     Returns
     -------
@@ -55,6 +64,7 @@ def cone_bounds(system, load, *, lam=None, only=None, facets=None, intervals="la
     t0 = time.perf_counter()
     if only is not None:
         intervals, adjacency = _only(only)
+    check_solver(solver)
     data = cone_data(system, load)
     n = data.n_nodes
     if lam is not None:
@@ -66,13 +76,13 @@ def cone_bounds(system, load, *, lam=None, only=None, facets=None, intervals="la
             raise InputError(f"lam must be finite and >= 0; got {lam}")
     L, F = data.load_factor, data.force
     if not load.has_periodic_part:
-        out = melan_lam2(data, rtol=rtol, max_rounds=1)
+        out = melan_lam2(data, rtol=rtol, max_rounds=1, solver=solver, fail=_fail)
         status = "infeasible" if out.status == "infeasible" else "unbounded_no_periodic_part"
         lo = hi = np.nan if status == "infeasible" else np.inf
         msg = "; ".join(out.messages) if status == "infeasible" else \
             "the load has no periodic part: a safe state exists for every lam"
     else:
-        out = melan_lam2(data, rtol=rtol, max_rounds=max_rounds)
+        out = melan_lam2(data, rtol=rtol, max_rounds=max_rounds, solver=solver, fail=_fail)
         status, lo, hi = out.status, out.lam_lo * L, out.lam_hi * L
         msg = "; ".join(out.messages)
     v_lam2 = data.slip(out.u_safe, system) if out.margin > -np.inf else np.zeros(0)
@@ -100,7 +110,8 @@ def cone_bounds(system, load, *, lam=None, only=None, facets=None, intervals="la
         safe_lam=float(safe_lam), safe_state=safe_state, safe_margin=float(margin),
         state_at_lam2=v_lam2, certificate=cert, residuals=dict(out.residuals),
         n_socps=int(out.rounds), n_cuts=int(len(out.cut_nodes)), iterations=int(out.iterations),
-        solve_time=0.0, n_nodes=n, history=list(out.history), worst_times=tw)
+        solve_time=0.0, n_nodes=n, history=list(out.history), worst_times=tw,
+        socp_paths=tuple(out.log.paths), fallbacks=tuple(out.log.fallbacks))
     if facets is not None or intervals or adjacency:
         from .polygon import polygon_bounds
 

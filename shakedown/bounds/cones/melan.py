@@ -27,8 +27,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .rounds import SocpLog, active_cuts, margin_state, resolve_solver, solve_round
 from .separation import worst_times
-from .socp import LAM_CAP, dual_bound, solve_cuts, static_margin
+from .socp import LAM_CAP, dual_bound, solve_cuts
 
 #: Default relative width of the certified bracket ``[lam_lo, lam_hi]``.
 BRACKET_RTOL = 1e-6
@@ -59,6 +60,7 @@ class MelanOutcome:
     messages: list = field(default_factory=list)
     u0: np.ndarray | None = None
     tau0: float = np.nan
+    log: SocpLog = field(default_factory=SocpLog)
 
 
 def initial_cuts(data, per_node=None):
@@ -75,7 +77,8 @@ def initial_cuts(data, per_node=None):
     return np.repeat(np.arange(n), t.size), np.tile(t, n)
 
 
-def melan_lam2(data, *, rtol=BRACKET_RTOL, max_rounds=60, cuts=None) -> MelanOutcome:
+def melan_lam2(data, *, rtol=BRACKET_RTOL, max_rounds=60, cuts=None, solver="auto",
+               fail=None) -> MelanOutcome:
     """The certified bracket ``lam_lo <= lam2 <= lam_hi`` (module docstring), nondimensional.
 
     Parameters
@@ -87,12 +90,26 @@ def melan_lam2(data, *, rtol=BRACKET_RTOL, max_rounds=60, cuts=None) -> MelanOut
         SOCP solves at most; the bracket reached is returned with status ``"bracket"``.
     cuts : tuple of (nodes, times), optional
         Starting cuts (default :func:`initial_cuts`).
+    solver : {"auto", "dense", "clarabel"}
+        ``"dense"``: every SOCP of a coupled system by the dense interior point (checked;
+        Clarabel where the check fails or where its bound is too loose to close the bracket),
+        and each round re-solves only the cuts that carry the last relaxation plus the new
+        worst times (:func:`.rounds.active_cuts`); ``"clarabel"``: every SOCP by Clarabel on
+        the growing set of cuts; ``"auto"``: ``"dense"`` from
+        :data:`.rounds.DENSE_MIN_NODES` nodes on.  Uncoupled systems always use Clarabel
+        (their SOCP is sparse).
+    fail : callable, optional
+        Test hook passed to :func:`.rounds.solve_round`.
     """
     nodes, times = initial_cuts(data) if cuts is None else (np.asarray(cuts[0]),
                                                             np.asarray(cuts[1], float))
-    u0, tau0 = static_margin(data)
+    log = SocpLog()
+    solver = resolve_solver(solver, data)
+    u0, tau0 = margin_state(data, solver=solver, log=log, fail=fail)
     out = MelanOutcome("bounded", 0.0, np.inf, u0, tau0, u0, 0.0, nodes, times, np.zeros((0, 3)),
-                       u0=u0, tau0=tau0)
+                       u0=u0, tau0=tau0, log=log)
+    dense = solver == "dense"
+    start = (u0, 0.0)
     if not tau0 > 0:
         out.status = "infeasible"
         out.lam_lo = out.lam_hi = np.nan
@@ -102,7 +119,8 @@ def melan_lam2(data, *, rtol=BRACKET_RTOL, max_rounds=60, cuts=None) -> MelanOut
         return out
     worst = {"cone": 0.0, "stationarity": 0.0, "sign": 0.0}
     for rnd in range(max_rounds):
-        ans = solve_cuts(data, nodes, times)
+        ans, bound = solve_round(data, nodes, times, solver=solver, start=start,
+                                 dual_tol=DUAL_TOL, log=log, fail=fail)
         out.rounds = rnd + 1
         out.iterations += ans.iterations
         if ans.status == "unbounded":
@@ -117,16 +135,40 @@ def melan_lam2(data, *, rtol=BRACKET_RTOL, max_rounds=60, cuts=None) -> MelanOut
             out.status = "failed"
             out.messages.append(f"the SOCP solver stopped with status {ans.status}")
             break
-        hi, res = dual_bound(data, nodes, times, ans.z, ans.y_cap)
-        for k, v in res.items():
-            worst[k] = max(worst[k], v)
-        if max(res.values()) <= DUAL_TOL and hi < out.lam_hi:
-            out.lam_hi, out.z = hi, ans.z
-            out.cut_nodes, out.cut_times = nodes.copy(), times.copy()
+        hi, res = dual_bound(data, nodes, times, ans.z, ans.y_cap) if bound is None else bound
+        cert = (hi, res, ans.z, nodes, times)
         g, tw = worst_times(data, ans.u, ans.lam)
         eps = max(float(g.max()), 0.0)
         theta = tau0 / (tau0 + eps + CUT_TOL * tau0)
         uc, lc = theta * ans.u + (1 - theta) * u0, theta * ans.lam
+        if bound is not None and _too_wide(out, hi, lc, ans.lam, rtol):
+            # the cuts are right but the dense answer's gap (~ cuts x mu) is too wide to close
+            # the bracket: its active cuts alone (a relaxation too) by the dense path, and if
+            # that is still too wide, the whole round by Clarabel
+            cert, ans2 = _tighten(data, nodes, times, ans, (0.9 * uc + 0.1 * u0, 0.9 * lc), log,
+                                  fail)
+            out.iterations += ans2.iterations if ans2 is not None else 0
+            if _too_wide(out, cert[0], lc, ans.lam, rtol):
+                log.record("clarabel", "dense interior point: gap too wide to close the bracket "
+                           f"({(hi - ans.lam) / hi:.2g})")
+                ans = solve_cuts(data, nodes, times)
+                out.iterations += ans.iterations
+                if ans.status != "optimal":
+                    out.status = "failed"
+                    out.messages.append(f"the SOCP solver stopped with status {ans.status}")
+                    break
+                hi, res = dual_bound(data, nodes, times, ans.z, ans.y_cap)
+                cert = (hi, res, ans.z, nodes, times)
+                g, tw = worst_times(data, ans.u, ans.lam)
+                eps = max(float(g.max()), 0.0)
+                theta = tau0 / (tau0 + eps + CUT_TOL * tau0)
+                uc, lc = theta * ans.u + (1 - theta) * u0, theta * ans.lam
+        hi, res = cert[0], cert[1]
+        for k, v in res.items():
+            worst[k] = max(worst[k], v)
+        if max(res.values()) <= DUAL_TOL and hi < out.lam_hi:
+            out.lam_hi, out.z = hi, cert[2]
+            out.cut_nodes, out.cut_times = cert[3].copy(), cert[4].copy()
         gc, _ = worst_times(data, uc, lc)
         if gc.max() <= 0 and lc >= out.lam_lo:
             out.lam_lo, out.u_safe, out.margin = lc, uc, float(-gc.max())
@@ -139,6 +181,9 @@ def melan_lam2(data, *, rtol=BRACKET_RTOL, max_rounds=60, cuts=None) -> MelanOut
             out.messages.append("the relaxation's multipliers did not certify its value "
                                 f"(residuals {res})")
             break
+        start = (0.9 * uc + 0.1 * u0, 0.9 * lc)  # strictly inside every cone
+        if dense:
+            nodes, times = _prune(nodes, times, ans.z, tw)
         nodes, times = _add_cuts(nodes, times, viol, tw[viol])
     else:
         out.status = "bracket"
@@ -149,6 +194,39 @@ def melan_lam2(data, *, rtol=BRACKET_RTOL, max_rounds=60, cuts=None) -> MelanOut
                             f"(nondimensional) after {out.rounds} SOCPs, not to rtol = {rtol:g}")
     out.residuals = worst
     return out
+
+
+def _too_wide(out, hi, lc, lam, rtol):
+    """The state's side would close the bracket but the bound ``hi`` does not."""
+    lo, up = max(lc, out.lam_lo), min(hi, out.lam_hi)
+    return lo >= (1 - 0.5 * rtol) * lam and up - lo > rtol * up
+
+
+def _tighten(data, nodes, times, ans, start, log, fail):
+    """The bound of the relaxation on the active cuts of ``ans`` alone (fewer cones: a smaller
+    gap at the interior point's accuracy); ``(cert, answer)`` with ``cert = (hi, residuals, z,
+    nodes, times)``, the better (smaller, valid) of the two bounds."""
+    hi, res = dual_bound(data, nodes, times, ans.z, ans.y_cap)
+    cert = (hi, res, ans.z, nodes, times)
+    sn, st = active_cuts(nodes, times, ans.z, np.zeros(0, int), np.zeros(0))
+    if sn.size >= nodes.size:
+        return cert, None
+    a2, b2 = solve_round(data, sn, st, solver="dense", start=start, dual_tol=DUAL_TOL, log=log,
+                         fail=fail)
+    if a2.status != "optimal":
+        return cert, a2
+    h2, r2 = dual_bound(data, sn, st, a2.z, a2.y_cap) if b2 is None else b2
+    if max(r2.values()) <= DUAL_TOL and h2 < hi:
+        cert = (h2, r2, a2.z, sn, st)
+    return cert, a2
+
+
+def _prune(nodes, times, z, tw):
+    """The cuts that carry the relaxation (:func:`.rounds.active_cuts`), and the worst time of
+    every node left without a cut."""
+    nn, tt = active_cuts(nodes, times, z, np.zeros(0, int), np.zeros(0))
+    free = np.setdiff1d(np.arange(tw.size), nn)
+    return np.concatenate([nn, free]), np.concatenate([tt, tw[free]])
 
 
 def _add_cuts(nodes, times, viol, tw):

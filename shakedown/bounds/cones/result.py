@@ -71,6 +71,11 @@ class ConeBounds:
     history : list of tuple
         Per SOCP: ``(cuts, relaxation value, lam2_lower, lam2_upper, worst violation)``
         (nondimensional load factors and violations).
+    socp_paths : tuple of str
+        Which solver answered each SOCP (the static-margin SOCP first): ``"dense"`` (the dense
+        interior point, its answer checked by its own conditions) or ``"clarabel"``.
+    fallbacks : tuple of str
+        ``"SOCP k: reason"`` for each SOCP the dense path tried and Clarabel answered.
     """
 
     lam2: float
@@ -96,6 +101,13 @@ class ConeBounds:
     polyhedral: object = field(default=None, repr=False)
     history: list = field(default_factory=list, repr=False)
     worst_times: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+    socp_paths: tuple = ()
+    fallbacks: tuple = ()
+
+    @property
+    def path(self) -> str:
+        """``"dense"``, ``"clarabel"`` or ``"dense+clarabel"``: the solvers that answered."""
+        return "+".join(p for p in ("dense", "clarabel") if p in self.socp_paths) or "none"
 
     @property
     def dim(self) -> int:
@@ -138,6 +150,7 @@ class ConeBounds:
             "residuals": {k: float(v) for k, v in self.residuals.items()},
             "n_socps": int(self.n_socps), "n_cuts": int(self.n_cuts),
             "solve_time_s": float(self.solve_time), "n_nodes": int(self.n_nodes),
+            "socp_paths": list(self.socp_paths), "fallbacks": list(self.fallbacks),
         }
 
     def verdict(self) -> str:
@@ -170,7 +183,9 @@ class ConeBounds:
         d = self.to_dict()
         lines = [f"3-D shakedown bounds ({self.n_nodes} nodes): {self.status}",
                  f"  lam2 = {d['lam2']}   bracket [{d['lam2_lower']}, {d['lam2_upper']}]",
-                 f"  SOCPs: {self.n_socps}, cuts: {self.n_cuts}, time {self.solve_time:.3g} s"]
+                 f"  SOCPs: {self.n_socps}, cuts: {self.n_cuts}, time {self.solve_time:.3g} s, "
+                 f"solver: {self.path}"
+                 + (f" ({len(self.fallbacks)} fallback(s))" if self.fallbacks else "")]
         if self.facets:
             lines.append(f"  inscribed {self.facets}-gons: lam1 = {d['lam1_cone']}, lam_adj = "
                          f"{d['lam_adj_cone']}, lam2 = {d['lam2_polygon']}")
