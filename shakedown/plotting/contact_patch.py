@@ -86,7 +86,7 @@ def _square(ax, xy):
     ax.set_ylim(xy[:, 1].min() - pad, xy[:, 1].max() + pad)
 
 
-def plot_patch_states(model, run, t: float, ax=None, *, units=None, scale=None):
+def plot_patch_states(model, run, t: float, ax=None, *, units=None, scale=None, legend=True):
     """Node states at the recorded instant nearest to ``t`` [periods], with arrows of ``q``.
 
     Parameters
@@ -99,6 +99,8 @@ def plot_patch_states(model, run, t: float, ax=None, *, units=None, scale=None):
     scale : float, optional
         Force per unit of length on the map [force / length] (shared between panels when
         given); default: the largest ``|q|`` of the steady cycle spans 1.5 mean node spacings.
+    legend : bool
+        Draw the states' legend in the axes (``False`` for panels that share a figure legend).
     """
     tab = _table(run)
     xy = patch_coordinates(model)
@@ -116,6 +118,8 @@ def plot_patch_states(model, run, t: float, ax=None, *, units=None, scale=None):
     ax.quiver(*xy[nodes].T, *q.T, angles="xy", scale_units="xy", scale=scale, color="black",
               width=0.004, zorder=3)
     _square(ax, xy)
+    if legend:
+        ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0)
     ax.set_title(f"t = {t_k:.3g} T", fontsize=10)
     ax.set_xlabel(f"x along t_x {_unit(units, 'length')}")
     ax.set_ylabel(f"y along t_y {_unit(units, 'length')}")

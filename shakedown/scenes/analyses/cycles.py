@@ -371,7 +371,7 @@ def _patch_plots(ctx, run, lam, units):
     qmax = float(np.hypot(tab["q_x"], tab["q_y"]).max()) or 1.0
     fig, axs = plt.subplots(2, 2, figsize=(9, 8.4), sharex=True, sharey=True)
     for ax, t in zip(axs.ravel(), (0.0, 0.25, 0.5, 0.75), strict=True):
-        plot_patch_states(ctx.model, run, t, ax, units=units)
+        plot_patch_states(ctx.model, run, t, ax, units=units, legend=False)
         if u1 is not None:  # the grip's displacement at that instant
             u = lam * u1 * np.cos(2 * np.pi * t)
             ax.set_title(f"{ax.get_title()}: u = {0.0 if abs(u) < 1e-12 * abs(u1) else u:.3g} "
