@@ -284,7 +284,8 @@ def part_paths(n, X=0.5, steps=40, max_cycles=400, tol=1e-8, mats=None, out_png=
 
 
 def _zones_figure(zones, out_png):
-    """One row per (materials, load), one panel per path: the permanently stuck cells."""
+    """One row per (materials, load), one panel per path: the permanently stuck cells; "not
+    common" counts the cells that differ from those stuck in every steady run."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -292,36 +293,56 @@ def _zones_figure(zones, out_png):
     from shakedown.plotting import half_space as ph
 
     k = len(zones[0][4])
-    fig, axs = plt.subplots(len(zones), k, figsize=(2.3 * k, 2.6 * len(zones)), squeeze=False)
+    fig, axs = plt.subplots(len(zones), k, figsize=(2.3 * k, 2.5 * len(zones)), squeeze=False)
     for i, (m, a, label, lname, runs) in enumerate(zones):
-        sets = [set(r["stuck"]) for r in runs]
-        common = set.intersection(*sets)
+        steady = [set(r["stuck"]) for r in runs if r["status"] == "periodic"]
+        common = set.intersection(*steady) if steady else set()
         for j, r in enumerate(runs):
             ax = axs[i, j]
-            ph.plot_stuck_zone(m, r["stuck"], a=a, zoom=1.1 * a, ax=ax, title=(
-                f"{r['path']}\n{len(r['stuck'])} cells, "
-                f"{len(set(r['stuck']) - common)} not common"))
+            if r["status"] == "periodic":
+                note = f"{len(r['stuck'])} cells, {len(set(r['stuck']) ^ common)} not common"
+            else:
+                note = f"NOT STEADY after {r['cycles']} cycles (change {r['last_change']:.0e})"
+            ph.plot_stuck_zone(m, r["stuck"], a=a, zoom=1.1 * a, ax=ax,
+                               title=f"{r['path']}\n{note}")
             ax.title.set_fontsize(6.5)
             ax.legend().remove()
-            ax.set_xlabel("")
-            ax.set_ylabel(f"{label}\n{lname}" if j == 0 else "", fontsize=7)
-            ax.tick_params(labelsize=5)
-    fig.suptitle("permanently stuck cells (blue) after each initial loading path; dashed: Hertz a",
+            ax.set_xlabel("x [length]" if i == len(zones) - 1 else "", fontsize=7)
+            ax.set_ylabel(f"{label}, {lname}\ny [length]" if j == 0 else "", fontsize=7)
+            ax.tick_params(labelsize=5, labelbottom=i == len(zones) - 1, labelleft=j == 0)
+    fig.suptitle("permanently stuck cells (blue) of the steady cycle after each initial loading "
+                 "path (dashed: Hertz a); rows: materials (beta), oscillating / rotating Q",
                  fontsize=9)
     fig.tight_layout()
     fig.savefig(out_png, dpi=110)
 
+
+def replot(json_path, out_png, n=16):
+    """The stick-zone figure again from a ``paths`` JSON (models rebuilt, no runs)."""
+    rows = json.loads(Path(json_path).read_text())
+    zones = []
+    for r in rows:
+        mt = MATERIALS[r["materials"]]
+        a = float(cont.hertz_radius(r["P0"], R, m_star(mt)))
+        m = sd.half_space_model(radius=R, n_cells=r.get("n", n), width=2.4 * a, friction=F,
+                                materials=mt)
+        zones.append((m, a, f"{r['materials']} (beta {r['beta']:.2f})", r["load"], r["paths"]))
+    _zones_figure(zones, out_png)
 
 if __name__ == "__main__":
     ap = argparse.ArgumentParser()
     ap.add_argument("part", choices=["cm", "md", "cubic", "rotating", "uniqueness", "pq", "paths"])
     ap.add_argument("--mats", nargs="*", default=None, choices=list(MATERIALS))
     ap.add_argument("--max-cycles", type=int, default=400)
+    ap.add_argument("--replot", action="store_true", help="paths: redraw the figure from the JSON")
     ap.add_argument("--ns", type=int, nargs="*", default=[11, 15, 21, 31])
     ap.add_argument("--n", type=int, default=21)
     a = ap.parse_args()
     print(f"# OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS')}; load {os.getloadavg()}")
     t0 = time.perf_counter()
+    if a.replot:
+        replot(HERE / "half_space_paths.json", HERE / "half_space_uniqueness_zones.png", a.n)
+        raise SystemExit(0)
     out = {"cm": lambda: part_cm(a.ns), "md": lambda: part_md(a.ns), "cubic": lambda: part_cubic(a.n),
            "rotating": lambda: part_rotating(a.n), "uniqueness": lambda: part_uniqueness(a.n),
            "pq": lambda: part_pq(a.n),
