@@ -104,22 +104,24 @@ def _restrict(ctx, options):
 
 
 def _contact_note(cs, b) -> tuple[str, dict]:
-    """Verdict prefix and JSON fields of a run on the closed nodes."""
+    """Verdict suffix and JSON fields of a run on the closed nodes."""
     import numpy as np
 
     nc, n = cs.closed.size, cs.closed.size + cs.open.size
     d = {"contact": "static", "closed_nodes": [int(i) + 1 for i in cs.closed],
          "n_closed": int(nc), "n_nodes_full": int(n)}
+    if cs.open.size == 0:
+        return " (Every node is in contact under the static load: nothing condensed out.)", d
     note = (f" (Bounds of the {nc} of {n} nodes in contact under the static load; the other "
             f"{n - nc} are condensed out as free, exact while they stay open.")
-    if cs.open.size and np.size(b.safe_state) and np.isfinite(b.safe_lam):
+    if np.size(b.safe_state) and np.isfinite(b.safe_lam):
         slip = np.asarray(b.safe_state, float)
         gmin = float(cs.open_gaps(slip, np.zeros(nc), b.safe_lam).min())
         d["open_gap_min_safe_state"] = gmin
         scale = max(float(np.abs(slip).max()), 1e-300)
         if gmin < -1e-9 * scale:
-            note += (f" The safe state found at lam = {fmt(b.safe_lam)} would close part of "
-                     f"that open rim (smallest gap {fmt(gmin)}): above lam2 the system cannot "
+            note += (f" The safe state found at lam = {fmt(b.safe_lam)} would close some of "
+                     f"the open nodes (smallest gap {fmt(gmin)}): above lam2 the system cannot "
                      "shake down with those nodes open; below it, shaking down may need some "
                      "of them closed.)")
         else:
