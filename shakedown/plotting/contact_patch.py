@@ -66,9 +66,11 @@ def _at(tab, t: float):
     """Rows of the recorded instant nearest to ``t`` (modulo one period), sorted by node."""
     times = np.unique(tab["t"].to_numpy(float))
     frac = times - np.floor(times[0])
-    k = int(np.argmin(np.abs(((frac - t) + 0.5) % 1.0 - 0.5)))
+    # a table holding both ends of the period: the end (a step's result) stands for both
+    first = 1 if len(times) > 1 and abs(frac[-1] - frac[0] - 1.0) < 1e-9 else 0
+    k = first + int(np.argmin(np.abs(((frac[first:] - t) + 0.5) % 1.0 - 0.5)))
     rows = tab[tab["t"] == times[k]].sort_values("node")
-    return float(frac[k]), rows
+    return float(frac[k] % 1.0), rows
 
 
 def _spacing(xy) -> float:

@@ -173,8 +173,11 @@ def _plots(ctx, model, run_, loop, a, c, fP):
     tt = np.mod(np.asarray(loop["t"], float), 1.0)
     Qs = float(np.abs(loop["Q"]).max()) or 1.0
     fig, axs = plt.subplots(1, 4, figsize=(18, 4.8))
+    # the orbit's first row repeats its last instant (t = 0 and 1) as the state before the
+    # first step: the instants are taken from the steps' results (rows 1..T-1)
+    first = 1 if len(tt) > 1 and abs((tt[-1] - tt[0] + 0.5) % 1.0 - 0.5) < 1e-9 else 0
     for ax, target in zip(axs, (0.0, 0.25, 0.5, 0.75), strict=True):
-        k = int(np.argmin(np.abs((tt - target + 0.5) % 1.0 - 0.5)))
+        k = first + int(np.argmin(np.abs((tt[first:] - target + 0.5) % 1.0 - 0.5)))
         Qk = [_clean(x, Qs) for x in loop["Q"][k]]
         ph.plot_contact_map(model, loop["q_full"][k], loop["p_full"][k], loop["states"][k], a=a,
                             c=c, zoom=zoom, ax=ax,
