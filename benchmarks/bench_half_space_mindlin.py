@@ -196,16 +196,157 @@ def part_pq(n, steps=40):
     return rows
 
 
+#: Named initial loading paths OA (points (Q_x, Q_y, P) in units of (f P0, f P0, P0)), each
+#: ending where the cycle starts, (X, 0, 1): :func:`named_paths`.
+def named_paths(X, P0):
+    """Initial loading paths OA, by name, ending at ``(Q_x, Q_y, P) = (X f P0, 0, P0)``."""
+    fP = F * P0
+    end = (X * fP, 0.0, P0)
+    return {
+        "P then Qx (Mindlin)": [(0.0, 0.0, P0), end],
+        "P then Qy, then Qx": [(0.0, 0.0, P0), (0.0, X * fP, P0), end],
+        "P and Q together": [end],
+        "Qx overshoot 0.9 and back": [(0.0, 0.0, P0), (0.9 * fP, 0.0, P0), end],
+        "Qx to -0.9, then back": [(0.0, 0.0, P0), (-0.9 * fP, 0.0, P0), end],
+        "Qy to -0.9, then back": [(0.0, 0.0, P0), (0.0, -0.9 * fP, P0), end],
+        "P to 1.6 with Q, then down": [(0.0, 0.0, 1.6 * P0), (0.5 * fP, 0.5 * fP, 1.6 * P0), end],
+        "P to 0.4, Q around, then up": [(0.0, 0.0, 0.4 * P0), (0.0, 0.3 * fP, 0.4 * P0),
+                                        (-0.3 * fP, 0.0, 0.4 * P0), end],
+    }
+
+
+MATERIALS = {
+    "similar (nu = 0.3)": ((E, 0.3), (E, 0.3)),
+    "steel on aluminium": ((210e3, 0.3), (70e3, 0.33)),
+    "rigid on nu = 0.3": ((E, 0.3), (np.inf, 0.0)),
+}
+
+
+def part_paths(n, X=0.5, steps=40, max_cycles=400, tol=1e-8, mats=None, out_png=None):
+    """Cycles from the named initial loading paths; steady W, tractions, permanently stuck cells.
+
+    ``P = P0`` constant, ``Q = X f P0 (cos 2 pi t, k sin 2 pi t)``, ``k = 0`` (oscillating) or 1
+    (rotating).  Per case: the relative spread of the steady ``W``, the spread of the tractions
+    at the same instants (whole, time-varying part, pressure; per cell, over ``f p0 h^2``), the
+    permanently stuck cells shared by every path and those that differ.
+    """
+    rows, zones = [], []
+    print("| materials | beta | load | paths steady | cycles (max) | last state change (max) | W (mean) "
+          "| W spread / W | q - mean_t q spread | q spread | p spread | stuck cells: common / differing |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for label in mats or MATERIALS:
+        mt = MATERIALS[label]
+        P0 = P * mt[0][0] / E  # P scaled with body 1's modulus: the same a / R for every pair
+        a = float(cont.hertz_radius(P0, R, m_star(mt)))
+        m = sd.half_space_model(radius=R, n_cells=n, width=2.4 * a, friction=F, materials=mt)
+        p0 = float(cont.hertz_peak_pressure(P0, R, m.e_star))
+        scale = F * p0 * m.h**2
+        for lname, qy in (("oscillating", 0.0), ("rotating", X)):
+            runs = []
+            for pname, path in named_paths(X, P0).items():
+                t0 = time.process_time()
+                res = hs.static_path(m, path, substeps=4)[-1][0]
+                run, loop = hs.fretting_run(m, P0, X * F * P0, qy * F * P0, steps_per_cycle=steps,
+                                            max_cycles=max_cycles, initial_slip=res.slip,
+                                            initial_gap=res.gap, tol=tol)
+                cells = np.r_[m.keep[np.asarray(run.stuck_nodes, int)], m.reference]
+                runs.append(dict(path=pname, W=float(run.dissipation[-1]), status=run.status,
+                                 cycles=int(len(run.dissipation)),
+                                 last_change=float(run.state_change[-1]),
+                                 stuck=sorted(int(c) for c in cells), q=loop["q_full"],
+                                 p=loop["p_full"], cpu=time.process_time() - t0))
+            Ws = np.array([r["W"] for r in runs])
+            qa = np.array([r["q"] for r in runs])
+            pa = np.array([r["p"] for r in runs])
+            qvar = qa - qa.mean(axis=1, keepdims=True)
+            sets = [set(r["stuck"]) for r in runs]
+            common = set.intersection(*sets)
+            differ = set.union(*sets) - common
+            row = dict(materials=label, beta=float(m.beta), load=lname, n=n, P0=P0, a=a, h=m.h,
+                       W=Ws.tolist(), W_spread=float(np.ptp(Ws) / np.mean(Ws)),
+                       q_spread=float(np.max(np.ptp(qa, axis=0)) / scale),
+                       q_var_spread=float(np.max(np.ptp(qvar, axis=0)) / scale),
+                       p_spread=float(np.max(np.ptp(pa, axis=0)) / (p0 * m.h**2)),
+                       n_common=len(common), differing=sorted(differ),
+                       n_stuck=[len(s) for s in sets],
+                       paths=[{k: v for k, v in r.items() if k not in ("q", "p")} for r in runs])
+            rows.append(row)
+            zones.append((m, a, label, lname, runs))
+            nst = sum(r["status"] == "periodic" for r in runs)
+            print(f"| {label} | {m.beta:.3f} | {lname} | {nst}/{len(runs)} | "
+                  f"{max(r['cycles'] for r in runs)} | {max(r['last_change'] for r in runs):.1e} | "
+                  f"{np.mean(Ws):.4e} | {row['W_spread']:.1e} | {row['q_var_spread']:.1e} | "
+                  f"{row['q_spread']:.1e} | {row['p_spread']:.1e} | {len(common)} / {len(differ)} |",
+                  flush=True)
+    if out_png:
+        _zones_figure(zones, out_png)
+    return rows
+
+
+def _zones_figure(zones, out_png):
+    """One row per (materials, load), one panel per path: the permanently stuck cells; "not
+    common" counts the cells that differ from those stuck in every steady run."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from shakedown.plotting import half_space as ph
+
+    k = len(zones[0][4])
+    fig, axs = plt.subplots(len(zones), k, figsize=(2.3 * k, 2.5 * len(zones)), squeeze=False)
+    for i, (m, a, label, lname, runs) in enumerate(zones):
+        steady = [set(r["stuck"]) for r in runs if r["status"] == "periodic"]
+        common = set.intersection(*steady) if steady else set()
+        for j, r in enumerate(runs):
+            ax = axs[i, j]
+            if r["status"] == "periodic":
+                note = f"{len(r['stuck'])} cells, {len(set(r['stuck']) ^ common)} not common"
+            else:
+                note = f"NOT STEADY after {r['cycles']} cycles (change {r['last_change']:.0e})"
+            ph.plot_stuck_zone(m, r["stuck"], a=a, zoom=1.1 * a, ax=ax,
+                               title=f"{r['path']}\n{note}")
+            ax.title.set_fontsize(6.5)
+            ax.legend().remove()
+            ax.set_xlabel("x [length]" if i == len(zones) - 1 else "", fontsize=7)
+            ax.set_ylabel(f"{label}, {lname}\ny [length]" if j == 0 else "", fontsize=7)
+            ax.tick_params(labelsize=5, labelbottom=i == len(zones) - 1, labelleft=j == 0)
+    fig.suptitle("permanently stuck cells (blue) of the steady cycle after each initial loading "
+                 "path (dashed: Hertz a); rows: materials (beta), oscillating / rotating Q",
+                 fontsize=9)
+    fig.tight_layout()
+    fig.savefig(out_png, dpi=110)
+
+
+def replot(json_path, out_png, n=16):
+    """The stick-zone figure again from a ``paths`` JSON (models rebuilt, no runs)."""
+    rows = json.loads(Path(json_path).read_text())
+    zones = []
+    for r in rows:
+        mt = MATERIALS[r["materials"]]
+        a = float(cont.hertz_radius(r["P0"], R, m_star(mt)))
+        m = sd.half_space_model(radius=R, n_cells=r.get("n", n), width=2.4 * a, friction=F,
+                                materials=mt)
+        zones.append((m, a, f"{r['materials']} (beta {r['beta']:.2f})", r["load"], r["paths"]))
+    _zones_figure(zones, out_png)
+
 if __name__ == "__main__":
     ap = argparse.ArgumentParser()
-    ap.add_argument("part", choices=["cm", "md", "cubic", "rotating", "uniqueness", "pq"])
+    ap.add_argument("part", choices=["cm", "md", "cubic", "rotating", "uniqueness", "pq", "paths"])
+    ap.add_argument("--mats", nargs="*", default=None, choices=list(MATERIALS))
+    ap.add_argument("--max-cycles", type=int, default=400)
+    ap.add_argument("--replot", action="store_true", help="paths: redraw the figure from the JSON")
     ap.add_argument("--ns", type=int, nargs="*", default=[11, 15, 21, 31])
     ap.add_argument("--n", type=int, default=21)
     a = ap.parse_args()
     print(f"# OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS')}; load {os.getloadavg()}")
     t0 = time.perf_counter()
+    if a.replot:
+        replot(HERE / "half_space_paths.json", HERE / "half_space_uniqueness_zones.png", a.n)
+        raise SystemExit(0)
     out = {"cm": lambda: part_cm(a.ns), "md": lambda: part_md(a.ns), "cubic": lambda: part_cubic(a.n),
            "rotating": lambda: part_rotating(a.n), "uniqueness": lambda: part_uniqueness(a.n),
-           "pq": lambda: part_pq(a.n)}[a.part]()
+           "pq": lambda: part_pq(a.n),
+           "paths": lambda: part_paths(a.n, max_cycles=a.max_cycles, mats=a.mats,
+                                       out_png=HERE / "half_space_uniqueness_zones.png")}[a.part]()
     print(f"# total {time.perf_counter() - t0:.0f} s")
     (HERE / f"half_space_{a.part}.json").write_text(json.dumps(out, indent=1, default=float))

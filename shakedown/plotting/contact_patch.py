@@ -8,7 +8,9 @@ that sticks for the whole cycle over the pressure, and the tangential force loop
 * :func:`plot_stuck_zone` -- nodes stuck over the whole steady cycle, slipping at some instant,
   or open throughout, over the mean contact pressure.
 * :func:`plot_force_loop` -- total tangential reaction ``sum_i q_i(t)`` against the cyclic load's
-  phase ``lam cos(2 pi t)``: the hysteresis loop of a joint.
+  phase ``lam cos(2 pi t)``, or the force through the contact against a prescribed displacement:
+  the hysteresis loop of a joint; :func:`plot_loop_opening` the same loop with its straight-line
+  fit removed (a stiff joint's loop is thin), :func:`loop_area` its area.
 
 Every function takes ``ax=None`` (a new figure is made) and returns the axes it drew on; the
 steady table is that of a 3-D :class:`~shakedown.evolution.cycle_results.CycleRun` (columns
@@ -23,7 +25,7 @@ from ..model.errors import InputError
 from .axes import _new_ax, _plt, _unit
 
 __all__ = ["patch_coordinates", "plot_patch_states", "plot_stuck_zone", "plot_force_loop",
-           "STATE_COLOURS_3D"]
+           "plot_loop_opening", "loop_area", "STATE_COLOURS_3D"]
 
 #: Colours of the 3-D node states.
 STATE_COLOURS_3D = {"stick": "#7f7f7f", "slip": "#d62728", "separation": "#2ca02c"}
@@ -64,9 +66,11 @@ def _at(tab, t: float):
     """Rows of the recorded instant nearest to ``t`` (modulo one period), sorted by node."""
     times = np.unique(tab["t"].to_numpy(float))
     frac = times - np.floor(times[0])
-    k = int(np.argmin(np.abs(((frac - t) + 0.5) % 1.0 - 0.5)))
+    # a table holding both ends of the period: the end (a step's result) stands for both
+    first = 1 if len(times) > 1 and abs(frac[-1] - frac[0] - 1.0) < 1e-9 else 0
+    k = first + int(np.argmin(np.abs(((frac[first:] - t) + 0.5) % 1.0 - 0.5)))
     rows = tab[tab["t"] == times[k]].sort_values("node")
-    return float(frac[k]), rows
+    return float(frac[k] % 1.0), rows
 
 
 def _spacing(xy) -> float:
@@ -84,7 +88,7 @@ def _square(ax, xy):
     ax.set_ylim(xy[:, 1].min() - pad, xy[:, 1].max() + pad)
 
 
-def plot_patch_states(model, run, t: float, ax=None, *, units=None, scale=None):
+def plot_patch_states(model, run, t: float, ax=None, *, units=None, scale=None, legend=True):
     """Node states at the recorded instant nearest to ``t`` [periods], with arrows of ``q``.
 
     Parameters
@@ -97,6 +101,8 @@ def plot_patch_states(model, run, t: float, ax=None, *, units=None, scale=None):
     scale : float, optional
         Force per unit of length on the map [force / length] (shared between panels when
         given); default: the largest ``|q|`` of the steady cycle spans 1.5 mean node spacings.
+    legend : bool
+        Draw the states' legend in the axes (``False`` for panels that share a figure legend).
     """
     tab = _table(run)
     xy = patch_coordinates(model)
@@ -114,9 +120,11 @@ def plot_patch_states(model, run, t: float, ax=None, *, units=None, scale=None):
     ax.quiver(*xy[nodes].T, *q.T, angles="xy", scale_units="xy", scale=scale, color="black",
               width=0.004, zorder=3)
     _square(ax, xy)
+    if legend:
+        ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0)
     ax.set_title(f"t = {t_k:.3g} T", fontsize=10)
-    ax.set_xlabel(f"t_x {_unit(units, 'length')}")
-    ax.set_ylabel(f"t_y {_unit(units, 'length')}")
+    ax.set_xlabel(f"x along t_x {_unit(units, 'length')}")
+    ax.set_ylabel(f"y along t_y {_unit(units, 'length')}")
     return ax
 
 
@@ -130,7 +138,10 @@ def plot_stuck_zone(model, run, ax=None, *, units=None):
     p_mean = tab.groupby("node")["p"].mean().reindex(range(n)).to_numpy(float)
     ax = _new_ax(ax)
     if n >= 3 and np.ptp(xy[:, 0]) > 0 and np.ptp(xy[:, 1]) > 0:
-        cs = ax.tricontourf(xy[:, 0], xy[:, 1], p_mean, levels=12, cmap="Blues")
+        # levels from 0: round-off (|p| ~ 1e-14 at open nodes) must not fall below the first
+        pm = np.clip(np.nan_to_num(p_mean), 0.0, None)
+        levels = np.linspace(0.0, max(float(pm.max()), 1e-300), 13)
+        cs = ax.tricontourf(xy[:, 0], xy[:, 1], pm, levels=levels, cmap="Blues")
         _plt().colorbar(cs, ax=ax, label=f"mean p {_unit(units, 'force')}")
     S = state.reindex(range(n)).to_numpy(str)
     kinds = {
@@ -148,25 +159,72 @@ def plot_stuck_zone(model, run, ax=None, *, units=None):
                        zorder=3)
     _square(ax, xy)
     ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.25, 1.0), borderaxespad=0)
-    ax.set_xlabel(f"t_x {_unit(units, 'length')}")
-    ax.set_ylabel(f"t_y {_unit(units, 'length')}")
+    ax.set_xlabel(f"x along t_x {_unit(units, 'length')}")
+    ax.set_ylabel(f"y along t_y {_unit(units, 'length')}")
     ax.set_title("permanent stick zone over the steady cycle", fontsize=10)
     return ax
 
 
-def plot_force_loop(run, lam: float, ax=None, *, units=None):
-    """Total tangential reactions ``sum_i q_ix``, ``sum_i q_iy`` over the steady cycle against
-    ``lam cos(2 pi t)`` (the phase of a cosine cyclic load): the joint's hysteresis loop."""
+def _loop(run, lam, displacement):
+    """``(x, F_x, F_y, xlabel, ylabel)`` of the steady cycle, closed (first instant repeated)."""
     tab = _table(run)
     tot = tab.groupby("t")[["q_x", "q_y"]].sum().sort_index()
     t = tot.index.to_numpy(float)
-    x = float(lam) * np.cos(2 * np.pi * t)
+    if displacement is None:
+        x = float(lam) * np.cos(2 * np.pi * t)
+        fx, fy = tot["q_x"].to_numpy(float), tot["q_y"].to_numpy(float)
+        names = ("cyclic load phase lam cos(2 pi t)", "sum q_x", "sum q_y", "total tangential reaction")
+    else:
+        x = float(lam) * float(displacement) * np.cos(2 * np.pi * t)
+        fx, fy = -tot["q_x"].to_numpy(float), -tot["q_y"].to_numpy(float)
+        names = ("prescribed displacement u = lam u_1 cos(2 pi t)", "-sum q_x", "-sum q_y",
+                 "force through the contact")
+    close = np.r_[np.arange(t.size), 0]
+    return x[close], fx[close], fy[close], names
+
+
+def loop_area(x, F) -> float:
+    """``closed integral F dx`` over a closed polygon (trapezoidal) [force x length]: the work of
+    the force over the loop, the dissipation per cycle when ``x`` is the work-conjugate
+    displacement."""
+    x = np.asarray(x, float)
+    F = np.asarray(F, float)
+    return float(np.sum(0.5 * (F[1:] + F[:-1]) * np.diff(x)))
+
+
+def plot_force_loop(run, lam: float, ax=None, *, units=None, displacement=None):
+    """The joint's hysteresis loop over the steady cycle.
+
+    Without ``displacement``: total tangential reactions ``sum_i q_ix``, ``sum_i q_iy`` against
+    ``lam cos(2 pi t)`` (the phase of a cosine cyclic load).  With ``displacement`` ``u_1``
+    [length] (the amplitude of a prescribed cosine displacement, e.g. a lap joint's grip):
+    the force through the contact ``-sum_i q_i`` (the force that the loaded body transmits, in
+    the tangent frame) against the displacement ``lam u_1 cos(2 pi t)``.
+    """
+    x, fx, fy, (xl, lx, ly, yl) = _loop(run, lam, displacement)
     ax = _new_ax(ax)
-    ax.plot(np.r_[x, x[:1]], np.r_[tot["q_x"], tot["q_x"].iloc[:1]], "-o", ms=2,
-            label="sum q_x")
-    ax.plot(np.r_[x, x[:1]], np.r_[tot["q_y"], tot["q_y"].iloc[:1]], "--", label="sum q_y")
-    ax.set_xlabel("cyclic load phase lam cos(2 pi t)")
-    ax.set_ylabel(f"total tangential reaction {_unit(units, 'force')}")
+    ax.plot(x, fx, "-o", ms=2, label=lx)
+    ax.plot(x, fy, "--", label=ly)
+    ax.set_xlabel(f"{xl} {_unit(units, 'length') if displacement is not None else ''}".strip())
+    ax.set_ylabel(f"{yl} {_unit(units, 'force')}")
     ax.legend(fontsize="small")
-    ax.set_title("tangential force loop over the steady cycle", fontsize=10)
+    ax.set_title("force loop over the steady cycle", fontsize=10)
+    return ax
+
+
+def plot_loop_opening(run, lam: float, ax=None, *, units=None, displacement=None):
+    """The hysteretic part of the loop: ``F_x`` minus its straight-line fit against the same
+    abscissa as :func:`plot_force_loop`, so that a thin loop (a stiff joint with microslip)
+    shows its opening; the title gives the loop area ``closed integral F_x dx``."""
+    x, fx, _, (xl, lx, _, yl) = _loop(run, lam, displacement)
+    k, c = np.polyfit(x[:-1], fx[:-1], 1)
+    ax = _new_ax(ax)
+    ax.plot(x, fx - (k * x + c), "-o", ms=2, color="C0")
+    ax.axhline(0.0, color="0.6", lw=0.8)
+    ax.set_xlabel(f"{xl} {_unit(units, 'length') if displacement is not None else ''}".strip())
+    ax.set_ylabel(f"{lx} minus the line k x + c {_unit(units, 'force')}")
+    ax.text(0.02, 0.03, f"line: k = {k:.4g}, c = {c:.4g}", transform=ax.transAxes, fontsize=8)
+    area = loop_area(x, fx)
+    unit = f" {units['force']} {units['length']}" if units and displacement is not None else ""
+    ax.set_title(f"loop opening (straight-line fit removed): area {area:.4g}{unit}", fontsize=10)
     return ax

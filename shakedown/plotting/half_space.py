@@ -141,15 +141,18 @@ def plot_load_path(Q, *, friction_P=None, ax=None):
 
 
 def plot_dissipation_amplitude(X, W, *, W_exact=None, W_cubic=None, ax=None):
-    """Dissipation per cycle against the amplitude ``Q*/(f P)`` on log-log axes."""
+    """Dissipation per cycle against the amplitude ``Q*/(f P)`` on log-log axes (amplitudes at
+    which no cell slipped, ``W = 0``, cannot be drawn there and are left out)."""
     ax = _new_ax(ax, figsize=(5.5, 4))
-    ax.loglog(X, W, "o", label="discrete model")
+    X, W = np.asarray(X, float), np.asarray(W, float)
+    ok = W > 0
+    ax.loglog(X[ok], W[ok], "o", label="discrete model")
     xs = np.geomspace(min(X), max(X), 100)
     if W_exact is not None:
         ax.loglog(xs, W_exact(xs), "k-", lw=1, label="Mindlin-Deresiewicz")
     if W_cubic is not None:
         ax.loglog(xs, W_cubic(xs), "k:", lw=1, label=r"cubic law $W \propto Q^{*3}$")
-    ax.set_xlabel(r"amplitude $Q^*/(fP)$")
+    ax.set_xlabel(r"amplitude $Q^*/(fP)$ [-]")
     ax.set_ylabel("dissipation per cycle W [force x length]")
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3, which="both")

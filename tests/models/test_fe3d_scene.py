@@ -162,3 +162,40 @@ def test_bad_3d_scenes_named(edit, match):
     assert text != LAP
     with pytest.raises(SceneError, match=match):
         build(scene_from_string(text))
+
+
+@pytest.mark.slow  # ~19 s: two bounds and a 40-cycle run
+def test_lap_joint_bounds_on_the_closed_nodes(tmp_path):
+    """``contact = "static"``: the bolt opens the rim of the overlap, so the bounds are those of
+    the nodes closed under the preload (the others condensed out as free).  ``lam2`` is then
+    certified for that system; above it a run of that system cannot shake down (Melan), below it
+    a safe state exists (checked by its cone margins), and the verdict names the reduction."""
+    import json
+
+    from shakedown.model.open_nodes import condense_open
+    from shakedown.scenes.cli import main
+
+    scene = tmp_path / "lap.toml"
+    scene.write_text(LAP.replace("[analyses.cycles]", '[analyses.bounds]\ncontact = "static"\n'
+                                 "adjacency = false\n[analyses.cycles]"))
+    out = tmp_path / "out"
+    assert main(["bounds", str(scene), "-o", str(out), "-q"]) == 0
+    d = json.loads((out / "bounds.json").read_text())
+    assert d["status"] == "bounded" and 0 < d["n_closed"] < d["n_nodes_full"] == 25
+    assert f"Bounds of the {d['n_closed']} of 25 nodes" in d["verdict"]
+    lam2 = d["lam2"]
+    system, load, _ = build(scene_from_string(LAP))
+    cs = condense_open(system, load, np.asarray(d["closed_nodes"]) - 1)
+    b = sd.shakedown_bounds(cs.system, cs.load)
+    assert b.lam2 == pytest.approx(lam2, rel=1e-6)
+    run = sd.solve_cycles(cs.system, cs.load, 1.2 * lam2, steps_per_cycle=32, max_cycles=40)
+    assert not run.shook_down
+
+
+def test_bounds_contact_option_is_checked(tmp_path):
+    from shakedown.scenes.cli import main
+
+    scene = tmp_path / "lap.toml"
+    scene.write_text(LAP.replace("[analyses.cycles]", '[analyses.bounds]\ncontact = "closed"\n'
+                                 "[analyses.cycles]"))
+    assert main(["bounds", str(scene), "-o", str(tmp_path / "o"), "-q"]) != 0

@@ -110,12 +110,14 @@ def test_sphere_fretting_scene_runs_from_the_cli(tmp_path):
 
     out = tmp_path / "out"
     rc = main(["run", "sphere_fretting", "-q", "-o", str(out), "--set", "model.n_cells=9",
-               "--set", "fretting.steps_per_cycle=16"])
+               "--set", "fretting.steps_per_cycle=16", "--set", "fretting.amplitudes=[0.5, 1.0]"])
     assert rc == 0
     import json
 
     summary = json.loads((out / "fretting.json").read_text())
     assert summary["status"] == "periodic" and summary["reference_cell_ok"]
     assert summary["steady_dissipation"] == pytest.approx(summary["W_loop"], rel=0.05)
-    for name in ("contact_maps.png", "stuck_zone.png", "hysteresis.png", "steady_cycle.csv"):
+    assert summary["verdict"].startswith("Partial slip")
+    for name in ("contact_maps.png", "stuck_zone.png", "hysteresis.png", "steady_cycle.csv",
+                 "dissipation_amplitude.png", "dissipation_amplitude.csv"):
         assert (out / name).stat().st_size > 0

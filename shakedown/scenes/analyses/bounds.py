@@ -7,6 +7,15 @@ lower bound, see ``exact_intervals``), ``bounds_vs_lam.png`` and, for two nodes,
 ``safe_region_<i>.png``.  Its result
 starts with a verdict in plain sentences (:func:`shakedown.bounds.verdict.bounds_verdict`).
 Nodes are numbered from 1 in every file and message (constraint ``I_1`` belongs to node 1).
+
+3-D systems (``dim = 3``): :func:`shakedown.shakedown_bounds` returns a
+:class:`~shakedown.bounds.cones.result.ConeBounds` (``lam2`` certified on the friction cones,
+``lam_adj_cone`` with ``adjacency``); ``bounds.json`` and ``constraints.csv`` (one row per node:
+its worst time at ``lam2`` and its cuts) are written, no plots.  With ``contact = "static"``
+(both dimensions) the nodes that the static load alone opens are condensed out as free
+(:func:`shakedown.model.open_nodes.condense_open`): the bounds are then those of the closed
+nodes, exact while the others stay open, and ``bounds.json`` records the closed nodes and the
+smallest gap of the open ones in the safe state found.
 """
 
 from __future__ import annotations
@@ -14,7 +23,8 @@ from __future__ import annotations
 import numpy as np
 
 from ...bounds.engine import shakedown_bounds
-from ...bounds.verdict import bounds_verdict, constraint_name
+from ...bounds.verdict import bounds_verdict, constraint_name, fmt
+from ...model.errors import SceneError
 
 #: ``{key: (type, default, meaning)}``; ``shakedown bounds --help`` and the README table are
 #: generated from it.
@@ -27,6 +37,9 @@ OPTIONS = {
                                      "only where lam1 needs it, a proven lower bound elsewhere; "
                                      "column lam_high_exact of constraints.csv)"),
     "plots": (bool, True, "write PNG plots"),
+    "contact": (str, "all", "'all': every node in contact (the theory of the bounds); 'static': "
+                            "the nodes open under the static load are condensed out as free "
+                            "(exact while they stay open)"),
 }
 
 
@@ -55,25 +68,118 @@ def _table(b):
 PROGRESS_NODES = 300
 
 
+def _closed_under_static(system, load):
+    """The nodes in contact after one step from the virgin state to the static load."""
+    import numpy as np
+
+    from ...evolution import solve_step
+    from ...evolution.cone_step import ConeStepSolver
+
+    n = system.n_nodes
+    if system.dim == 3:
+        res = ConeStepSolver(system).solve(np.zeros((n, 2)), load.q0, load.p0)
+    else:
+        res = solve_step(system, np.zeros(n), load.q0, load.p0)
+    if not res.success:
+        raise SceneError(f"[analyses.bounds] contact = 'static': the step to the static load "
+                         f"failed ({res.message})")
+    return np.flatnonzero(np.asarray(res.gap) <= 0.0)
+
+
+def _restrict(ctx, options):
+    """``(system, load, closed subsystem or None)`` as ``contact`` asks."""
+    if options["contact"] not in ("all", "static"):
+        raise SceneError(f"[analyses.bounds] contact = {options['contact']!r}: choose 'all' or "
+                         "'static'")
+    if options["contact"] == "all":
+        return ctx.system, ctx.load, None
+    from ...model.open_nodes import condense_open
+
+    closed = _closed_under_static(ctx.system, ctx.load)
+    if closed.size == 0:
+        raise SceneError("[analyses.bounds] contact = 'static': the static load opens every "
+                         "node; nothing to bound")
+    cs = condense_open(ctx.system, ctx.load, closed)
+    return cs.system, cs.load, cs
+
+
+def _contact_note(cs, b) -> tuple[str, dict]:
+    """Verdict suffix and JSON fields of a run on the closed nodes."""
+    import numpy as np
+
+    nc, n = cs.closed.size, cs.closed.size + cs.open.size
+    d = {"contact": "static", "closed_nodes": [int(i) + 1 for i in cs.closed],
+         "n_closed": int(nc), "n_nodes_full": int(n)}
+    if cs.open.size == 0:
+        return " (Every node is in contact under the static load: nothing condensed out.)", d
+    note = (f" (Bounds of the {nc} of {n} nodes in contact under the static load; the other "
+            f"{n - nc} are condensed out as free, exact while they stay open.")
+    if np.size(b.safe_state) and np.isfinite(b.safe_lam):
+        slip = np.asarray(b.safe_state, float)
+        gmin = float(cs.open_gaps(slip, np.zeros(nc), b.safe_lam).min())
+        d["open_gap_min_safe_state"] = gmin
+        scale = max(float(np.abs(slip).max()), 1e-300)
+        if gmin < -1e-9 * scale:
+            note += (f" The safe state found at lam = {fmt(b.safe_lam)} would close some of "
+                     f"the open nodes (smallest gap {fmt(gmin)}): above lam2 the system cannot "
+                     "shake down with those nodes open; below it, shaking down may need some "
+                     "of them closed.)")
+        else:
+            note += (f" The safe state found at lam = {fmt(b.safe_lam)} keeps every open node "
+                     "open over the cycle.)")
+    else:
+        note += ")"
+    return note, d
+
+
 def run(ctx, options: dict) -> dict:
+    system, load, cs = _restrict(ctx, options)
+    if system.dim == 3:
+        return _run_3d(ctx, options, system, load, cs)
     lam = options["lam"]
     b = shakedown_bounds(
-        ctx.system, ctx.load, lam=None if lam < 0 else lam, adjacency=options["adjacency"],
+        system, load, lam=None if lam < 0 else lam, adjacency=options["adjacency"],
         intervals=True if options["exact_intervals"] else "lam1",
         # a progress line per stage where the bounds take more than a few seconds (issue 26)
-        progress=ctx.progress if ctx.system.n_nodes >= PROGRESS_NODES else None,
+        progress=ctx.progress if system.n_nodes >= PROGRESS_NODES else None,
     )
     verdict = bounds_verdict(b, adjacency=options["adjacency"])
     d = _node_numbers(b, b.to_dict())
+    if cs is not None:
+        note, extra = _contact_note(cs, b)
+        verdict = verdict + note
+        d.update(extra)
     d["verdict"] = verdict
     ctx.output.write_json("bounds.json", d)
     ctx.output.write_table("constraints.csv", _table(b))
-    if options["plots"]:
+    if options["plots"] and cs is None:
         _plots(ctx, b, options)
     out = {"verdict": verdict}
     out.update({k: d[k] for k in ("lam1", "lam2", "lam_adj", "status", "limiting_constraint",
                                   "adjacency_node", "lam_separation", "safe_margin", "n_lps",
                                   "solve_time_s")})
+    return out
+
+
+def _run_3d(ctx, options, system, load, cs) -> dict:
+    """The 3-D bounds: ``lam2`` on the cones, ``lam_adj_cone`` with ``adjacency``."""
+    lam = options["lam"]
+    # intervals=False: lam1 on the polygons is not asked for (lam_adj_cone is the candidate)
+    b = shakedown_bounds(system, load, lam=None if lam < 0 else lam,
+                         adjacency=options["adjacency"], intervals=False)
+    verdict = b.verdict()
+    d = b.to_dict()
+    if cs is not None:
+        note, extra = _contact_note(cs, b)
+        verdict = verdict + note
+        d.update(extra)
+    d["node_numbering"] = "from 1"
+    d["verdict"] = verdict
+    ctx.output.write_json("bounds.json", d)
+    ctx.output.write_table("constraints.csv", b.table())
+    out = {"verdict": verdict}
+    out.update({k: d[k] for k in ("lam2", "lam2_lower", "lam2_upper", "lam_adj_cone", "status",
+                                  "safe_margin", "solve_time_s")})
     return out
 
 

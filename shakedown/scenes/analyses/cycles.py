@@ -10,7 +10,10 @@
   ``trajectory.png`` (v space) and ``trajectory_tau.png`` (tau = A v space); for a 3-D model
   with node positions (3-D FE bodies), ``node_states.png`` and the contact patch maps
   ``contact_patch.png`` (states and traction arrows at four instants), ``stuck_zone.png`` and
-  ``force_loop.png`` (:mod:`shakedown.plotting.contact_patch`) instead of ``steady_cycle.png``;
+  ``force_loop.png`` (the force through the contact against the prescribed displacement when
+  the cyclic load is one displacement along ``x``, as a lap joint's grip, beside the loop with
+  its straight-line fit removed; :mod:`shakedown.plotting.contact_patch`) instead of
+  ``steady_cycle.png``;
   for any ``dim = 3`` system also ``cone_paths.png`` (per node, ``q / p`` over the steady cycle inside
   the friction cone) and ``slip_trajectories.png`` (``(v_x, v_y)``).
 
@@ -326,12 +329,30 @@ def _has_positions(model) -> bool:
     return True
 
 
+def _grip_amplitude(ctx):
+    """The amplitude [length] of the scene's cyclic load when it is one prescribed cosine
+    displacement along ``x`` (``[load.cyclic] displacement = {"<body>:<surface>" = [u, 0, 0]}``,
+    e.g. a lap joint's grip): the abscissa of the force loop.  ``None`` otherwise."""
+    load = getattr(getattr(ctx, "scene", None), "load", None) or {}
+    cyc = load.get("cyclic") if isinstance(load, dict) else None
+    if not isinstance(cyc, dict) or set(cyc) != {"displacement"} or "cyclic_sin" in load:
+        return None
+    disp = cyc["displacement"]
+    if not isinstance(disp, dict) or len(disp) != 1:
+        return None
+    u = np.asarray(next(iter(disp.values())), float).ravel()
+    if u.size < 2 or u[0] == 0 or np.any(u[1:] != 0):
+        return None
+    return float(u[0])
+
+
 def _patch_plots(ctx, run, lam, units):
     """The 3-D steady cycle as maps of the contact patch (and the node-state image)."""
     import matplotlib.pyplot as plt
 
     from ...plotting.contact_patch import (
         plot_force_loop,
+        plot_loop_opening,
         plot_patch_states,
         plot_stuck_zone,
     )
@@ -340,14 +361,21 @@ def _patch_plots(ctx, run, lam, units):
     fig, ax = plt.subplots(figsize=(6.4, 3.5))
     plot_node_states(run, ax)
     ctx.output.save_figure("node_states.png", fig)
-    fig, ax = plt.subplots(figsize=(6.4, 4.5))
-    plot_force_loop(run, lam, ax, units=units)
+    u1 = _grip_amplitude(ctx)
+    fig, axs = plt.subplots(1, 2, figsize=(12, 4.5))
+    plot_force_loop(run, lam, axs[0], units=units, displacement=u1)
+    plot_loop_opening(run, lam, axs[1], units=units, displacement=u1)
+    fig.tight_layout()
     ctx.output.save_figure("force_loop.png", fig)
     tab = run.steady_table
     qmax = float(np.hypot(tab["q_x"], tab["q_y"]).max()) or 1.0
     fig, axs = plt.subplots(2, 2, figsize=(9, 8.4), sharex=True, sharey=True)
     for ax, t in zip(axs.ravel(), (0.0, 0.25, 0.5, 0.75), strict=True):
-        plot_patch_states(ctx.model, run, t, ax, units=units)
+        plot_patch_states(ctx.model, run, t, ax, units=units, legend=False)
+        if u1 is not None:  # the grip's displacement at that instant
+            u = lam * u1 * np.cos(2 * np.pi * t)
+            ax.set_title(f"{ax.get_title()}: u = {0.0 if abs(u) < 1e-12 * abs(u1) else u:.3g} "
+                         f"{units['length']}", fontsize=10)
     fig.legend(*axs[0, 0].get_legend_handles_labels(), loc="lower center", ncol=3,
                fontsize="small")
     fig.suptitle(f"contact patch over the steady cycle at lam = {lam:.4g}: node states, arrows "

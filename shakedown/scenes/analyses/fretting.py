@@ -9,8 +9,12 @@ steady cycle with :func:`shakedown.studies.half_space.fretting_run` from Mindlin
   oscillating load on similar materials), the reference cell check, a verdict;
 * ``steady_cycle.csv`` -- per instant and cell: ``t``, ``cell``, ``x``, ``y``, ``q_x``, ``q_y``,
   ``p``, ``state``;
-* ``contact_maps.png`` (stick / slip / open with traction arrows at four instants),
-  ``stuck_zone.png``, ``hysteresis.png`` (``Q_x``-``delta_x`` and ``Q_x``-``Q_y``).
+* ``contact_maps.png`` (stick / slip / open with traction arrows at ``t = 0, 1/4, 1/2, 3/4``),
+  ``stuck_zone.png`` (against Mindlin's stick radius), ``hysteresis.png`` (``Q_x``-``delta_x``
+  with the Mindlin-Deresiewicz loop where it applies, and ``Q_x``-``Q_y``);
+* with ``amplitudes`` (multiples of the scene's ``Qx``, ``Qy``): the steady ``W`` at each
+  (``dissipation_amplitude.csv``) and ``dissipation_amplitude.png`` (log-log, with
+  Mindlin-Deresiewicz and the cubic law where they apply).
 """
 
 from __future__ import annotations
@@ -25,6 +29,8 @@ OPTIONS = {
     "max_cycles": (int, 10, "largest number of cycles simulated"),
     "tol": (float, 1e-9, "relative change of the cycle-start state that counts as steady"),
     "plots": (bool, True, "write PNG plots"),
+    "amplitudes": (list, [], "multiples of the tangential amplitude (Qx, Qy) at which to run the "
+                             "steady cycle too: W against amplitude on log-log axes"),
 }
 
 
@@ -71,13 +77,7 @@ def run(ctx, options: dict) -> dict:
                 ct = cont.tangential_compliance_constant(mats)
                 summary["mindlin_deresiewicz_W"] = float(
                     cont.mindlin_deresiewicz_dissipation(Qx, P0, f, a, ct))
-    verdict = (f"steady cycle after {run_.cycles_to_steady} cycle(s): W = {run_.steady_dissipation:.4g} "
-               f"per cycle, {summary['n_stuck_cells']} of {model.n_cells} cells stuck throughout")
-    if "mindlin_deresiewicz_W" in summary:
-        verdict += (f"; Mindlin-Deresiewicz W = {summary['mindlin_deresiewicz_W']:.4g} "
-                    f"({run_.steady_dissipation / summary['mindlin_deresiewicz_W'] - 1:+.1%})")
-    if not summary["reference_cell_ok"]:
-        verdict += "; WARNING: the reference cell slips or opens (the model is not exact)"
+    verdict = _verdict(run_, summary, model.n_cells)
     summary = {"verdict": verdict, **summary}
     ctx.output.write_json("fretting.json", summary)
     T, Nc = loop["p_full"].shape
@@ -86,24 +86,102 @@ def run(ctx, options: dict) -> dict:
         "x": np.tile(model.xy_cells[:, 0], T), "y": np.tile(model.xy_cells[:, 1], T),
         "q_x": loop["q_full"][..., 0].ravel(), "q_y": loop["q_full"][..., 1].ravel(),
         "p": loop["p_full"].ravel(), "state": np.asarray(loop["states"]).ravel()}))
+    amps = _amplitudes(options)
+    if amps.size:
+        Ws = np.array([hs.fretting_run(model, P0, x * Qx, x * Qy,
+                                       steps_per_cycle=options["steps_per_cycle"],
+                                       max_cycles=options["max_cycles"],
+                                       tol=options["tol"])[0].dissipation[-1] for x in amps])
+        ctx.output.write_table("dissipation_amplitude.csv", pd.DataFrame(
+            {"amplitude": amps, "Q_amplitude": amps * np.hypot(Qx, Qy), "W": Ws}))
     if options["plots"]:
         _plots(ctx, model, run_, loop, a, c, f * P0)
+        if amps.size:
+            _amplitude_plot(ctx, model, amps, Ws, P0, Qx, Qy, a)
     return {k: summary[k] for k in ("verdict", "steady_dissipation", "cycles_to_steady", "status")}
+
+
+def _amplitudes(options):
+    try:
+        amps = np.asarray(options["amplitudes"], float).ravel()
+    except (TypeError, ValueError):
+        raise SceneError("[analyses.fretting] amplitudes must be a list of positive numbers; "
+                         f"got {options['amplitudes']!r}") from None
+    if np.any(~np.isfinite(amps)) or np.any(amps <= 0):
+        raise SceneError("[analyses.fretting] amplitudes must be positive multiples of the "
+                         f"tangential amplitude; got {options['amplitudes']!r}")
+    return np.sort(amps)
+
+
+def _verdict(run_, summary, n_cells) -> str:
+    """Plain sentences, the answer first."""
+    W = run_.steady_dissipation
+    k = run_.cycles_to_steady
+    if run_.status != "periodic":
+        when = f"not yet steady after {len(run_.dissipation)} cycles (last W = {run_.dissipation[-1]:.4g})"
+    else:
+        when = "steady from the first cycle" if k == 0 else f"steady after {k} cycle(s)"
+    out = (f"Partial slip: the contact keeps slipping at its rim every cycle and dissipates "
+           f"W = {W:.4g} per cycle ({when}); {summary['n_stuck_cells']} of {n_cells} cells stay "
+           "stuck throughout")
+    if "mindlin_deresiewicz_W" in summary:
+        out += (f". Mindlin-Deresiewicz: W = {summary['mindlin_deresiewicz_W']:.4g} "
+                f"({W / summary['mindlin_deresiewicz_W'] - 1:+.1%}), stick radius "
+                f"{summary['mindlin_stick_radius']:.4g}")
+    out += "."
+    if not summary["reference_cell_ok"]:
+        out += " WARNING: the reference cell slips or opens (the model is not exact)."
+    return out
+
+
+def _clean(x, scale):
+    """``x`` with round-off (below 1e-9 of ``scale``) shown as 0."""
+    return 0.0 if abs(x) <= 1e-9 * scale else float(x)
+
+
+def _amplitude_plot(ctx, model, amps, Ws, P0, Qx, Qy, a):
+    import matplotlib.pyplot as plt
+
+    from ...models.half_space import continuum as cont
+    from ...plotting import half_space as ph
+
+    f = model.friction
+    X = amps * np.hypot(Qx, Qy) / (f * P0)
+    exact = cubic = None
+    mats = getattr(model, "materials", None)
+    if a is not None and Qy == 0 and mats is not None:
+        ct = cont.tangential_compliance_constant(mats)
+
+        def exact(x):
+            return cont.mindlin_deresiewicz_dissipation(x * f * P0, P0, f, a, ct)
+
+        def cubic(x):
+            return cont.mindlin_cubic_dissipation(x * f * P0, P0, f, a, ct)
+    fig, ax = plt.subplots(figsize=(5.5, 4.2))
+    ph.plot_dissipation_amplitude(X, Ws, W_exact=exact, W_cubic=cubic, ax=ax)
+    ax.set_title("dissipation per cycle against the tangential amplitude", fontsize=9)
+    ctx.output.save_figure("dissipation_amplitude.png", fig)
 
 
 def _plots(ctx, model, run_, loop, a, c, fP):
     import matplotlib.pyplot as plt
 
+    from ...models.half_space import continuum as cont
     from ...plotting import half_space as ph
 
     zoom = 1.15 * a if a is not None else None
-    T = len(loop["t"])
+    tt = np.mod(np.asarray(loop["t"], float), 1.0)
+    Qs = float(np.abs(loop["Q"]).max()) or 1.0
     fig, axs = plt.subplots(1, 4, figsize=(18, 4.8))
-    for ax, k in zip(axs, (T - 1, T // 4, T // 2 - 1, 3 * T // 4), strict=True):
-        Qk = loop["Q"][k]
+    # the orbit's first row repeats its last instant (t = 0 and 1) as the state before the
+    # first step: the instants are taken from the steps' results (rows 1..T-1)
+    first = 1 if len(tt) > 1 and abs((tt[-1] - tt[0] + 0.5) % 1.0 - 0.5) < 1e-9 else 0
+    for ax, target in zip(axs, (0.0, 0.25, 0.5, 0.75), strict=True):
+        k = first + int(np.argmin(np.abs((tt[first:] - target + 0.5) % 1.0 - 0.5)))
+        Qk = [_clean(x, Qs) for x in loop["Q"][k]]
         ph.plot_contact_map(model, loop["q_full"][k], loop["p_full"][k], loop["states"][k], a=a,
-                            zoom=zoom, ax=ax,
-                            title=f"t = {loop['t'][k]:.3f}: Q = ({Qk[0]:.3g}, {Qk[1]:.3g})")
+                            c=c, zoom=zoom, ax=ax,
+                            title=f"t = {tt[k]:.3g} T: Q = ({Qk[0]:.3g}, {Qk[1]:.3g})")
     fig.tight_layout()
     ctx.output.save_figure("contact_maps.png", fig)
     fig, ax = plt.subplots(figsize=(5, 5))
@@ -111,7 +189,13 @@ def _plots(ctx, model, run_, loop, a, c, fP):
     ph.plot_stuck_zone(model, cells, a=a, c_pred=c, zoom=zoom, ax=ax)
     ctx.output.save_figure("stuck_zone.png", fig)
     fig, axs = plt.subplots(1, 2, figsize=(11, 4.2))
-    ph.plot_hysteresis(loop["Q"], loop["delta"], ax=axs[0])
+    ref = None
+    mats = getattr(model, "materials", None)
+    if c is not None and mats is not None and np.all(np.asarray(loop["Q"])[:, 1] == 0):
+        ref = cont.mindlin_deresiewicz_loop(float(np.abs(loop["Q"][:, 0]).max()), fP / model.friction,
+                                            model.friction, a,
+                                            cont.tangential_compliance_constant(mats))
+    ph.plot_hysteresis(loop["Q"], loop["delta"], reference=ref, ax=axs[0])
     ph.plot_load_path(loop["Q"], friction_P=fP, ax=axs[1])
     fig.tight_layout()
     ctx.output.save_figure("hysteresis.png", fig)
