@@ -44,6 +44,7 @@ from .kernel_cache import (
     N_SLOTS,
     SEPARATED,
     STICK,
+    WINDOW,
     _hash,
     _invert,
     _layout,
@@ -53,6 +54,7 @@ from .kernel_cache import (
     _solve_lu,
     _solve_with,
     _store,
+    stamp,
 )
 from .kernel_jit import HAVE_KERNEL, njit
 from .kernel_updates import changed_unknowns, updated
@@ -72,7 +74,7 @@ UPDATE_MIN_SIZE = 8
 __all__ = ["march", "HAVE_KERNEL"]
 
 # counter indices
-C_ITER, C_HITS, C_FACT, C_UPD, C_STEPS, C_LU, C_SHORT = 0, 1, 2, 3, 4, 5, 6
+C_ITER, C_HITS, C_FACT, C_UPD, C_STEPS, C_LU, C_SHORT, C_PROBE = 0, 1, 2, 3, 4, 5, 6, 7
 
 
 @njit(cache=True)
@@ -193,8 +195,11 @@ def _visited(s, seen, n_seen):
 
 @njit(cache=True)
 def _step(s, K, f, q0, p0, n, ft, dtol, max_iter, mult, keys, hashes, offs, sizes, pool,
-          ipool, fpool, meta, counters, seen, z, q, p, mag, target):
-    """The active-set iteration of one step from the guess ``s`` (updated in place)."""
+          ipool, fpool, meta, counters, seen, z, q, p, mag, target, g):
+    """The active-set iteration of one step from the guess ``s`` (updated in place).  When
+    the guess fails its checks, the prediction ``g`` (the step's assignment in the previous
+    period) is tried next if it differs from the guess and its inverse is cached
+    (:func:`_probe`); if it fails too, the iteration goes on from the guess as before."""
     n_seen = 0
     single = False
     it = 0
@@ -214,6 +219,7 @@ def _step(s, K, f, q0, p0, n, ft, dtol, max_iter, mult, keys, hashes, offs, size
         if _violated(s, z, q, p, f, ft, dtol, n, mag, target) <= 1.0:
             counters[C_ITER] += it
             return True
+        predict = it == 1 and _differ(g, s)
         if single:
             j = int(np.argmax(mag))
             s[j] = target[j]
@@ -221,7 +227,46 @@ def _step(s, K, f, q0, p0, n, ft, dtol, max_iter, mult, keys, hashes, offs, size
             for j in range(n):
                 if mag[j] > 1.0:
                     s[j] = target[j]
+        if predict and _differ(g, s) and _probe(g, K, f, q0, p0, n, ft, dtol, mult, keys, hashes,
+                                                offs, sizes, pool, ipool, fpool, meta, counters,
+                                                z, q, p, mag, target):
+            s[:] = g
+            counters[C_ITER] += it
+            return True
     counters[C_ITER] += it
+    return False
+
+
+@njit(cache=True)
+def _probe(g, K, f, q0, p0, n, ft, dtol, mult, keys, hashes, offs, sizes, pool, ipool, fpool,
+           meta, counters, z, q, p, mag, target):
+    """The predicted assignment ``g`` (the same step's of the previous period) as this step's
+    answer, when its inverse is cached: its equations to ``EQ_TOL`` and its sign checks, every
+    node's by a margin of the tolerance (its state strict, not at a boundary).  True (``z, q,
+    p`` filled) when it passes; no inverse is computed or updated for a prediction."""
+    k = _lookup(g, _hash(g, mult), keys, hashes, meta)
+    if k < 0:
+        return False
+    X, free, coef = _slot(k, offs, sizes, pool, ipool, fpool)
+    if not _solve_with(X, free, coef, K, q0, p0, n, z, q, p) <= EQ_TOL * ft:
+        return False
+    # strictly inside its checks at every node (no node at a state boundary, where another
+    # assignment gives the same answer): then the answer's states determine the assignment,
+    # and it is the one the iteration from the guess ends with (when the answer is unique)
+    if not _violated(g, z, q, p, f, ft, dtol, n, mag, target) < -1.0:
+        return False
+    meta[LAST_SLOT] = k
+    counters[C_ITER] += 1
+    counters[C_HITS] += 1
+    counters[C_PROBE] += 1
+    return True
+
+
+@njit(cache=True)
+def _differ(a, b):
+    for j in range(a.size):
+        if a[j] != b[j]:
+            return True
     return False
 
 
@@ -236,7 +281,7 @@ def _maxabs(x):
 @njit(cache=True)
 def march(K, f, diag, QW, PW, j0, q0, p0, s, feas_tol, max_iter, mult, keys, hashes, offs,
           sizes, pool, ipool, fpool, meta, counters, seen, V, WG, Q, P, ST, ACT, SC, RES, WD,
-          SB, SCc, RESP, T, skey, sfree, scoef, smeta):
+          SB, SCc, RESP, T, skey, sfree, scoef, smeta, PRED):
     """Implicit steps ``j0 .. K-1`` of one period of one state (see the module docstring).
 
     ``q0, p0``: the base reactions of step ``j0`` (updated in place to those of the step
@@ -245,7 +290,11 @@ def march(K, f, diag, QW, PW, j0, q0, p0, s, feas_tol, max_iter, mult, keys, has
     dissipation to ``WD[0]``.  Returns the number of steps done (``K`` when the period is
     complete; otherwise the index of the step handed back to Python).  ``SB .. smeta``: the
     state of :mod:`.kernel_shortcut` (:func:`~.kernel_shortcut.state`), for the steps that keep
-    the previous step's assignment.
+    the previous step's assignment.  ``PRED`` (``(K, N)`` int8, or ``(0, N)`` for none): the
+    assignments of the same steps in the previous period; a step whose assignment differs from
+    the previous step's first tries ``PRED[j]`` when its inverse is cached (:func:`_probe`: in a
+    steady cycle the assignments repeat, so a step costs one solve with a cached inverse
+    instead of an active-set iteration through new assignments), else iterates as before.
     """
     n = f.size
     n_steps = QW.shape[0]
@@ -258,6 +307,7 @@ def march(K, f, diag, QW, PW, j0, q0, p0, s, feas_tol, max_iter, mult, keys, has
     mag = np.empty(n)
     target = np.empty(n, np.int8)
     trial = s.copy()
+    meta[WINDOW] = n_steps  # a reset keeps the answers of the last period (kernel_cache)
     smeta[_ks.VALID] = 0  # no answer of this call yet
     smeta[_ks.RUN] = 0
     for j in range(j0, n_steps):
@@ -284,8 +334,10 @@ def march(K, f, diag, QW, PW, j0, q0, p0, s, feas_tol, max_iter, mult, keys, has
             smeta[_ks.VALID] = 0
             trial[:] = s
             it0 = counters[C_ITER]
+            g = PRED[j] if PRED.shape[0] == n_steps else s
             if not _step(trial, K, f, q0, p0, n, ft, dtol, max_iter, mult, keys, hashes, offs,
-                         sizes, pool, ipool, fpool, meta, counters, seen, z, q, p, mag, target):
+                         sizes, pool, ipool, fpool, meta, counters, seen, z, q, p, mag, target,
+                         g):
                 return j
             smeta[_ks.RUN] = smeta[_ks.RUN] + 1 if counters[C_ITER] - it0 == 1 else 0
             s[:] = trial
@@ -294,6 +346,7 @@ def march(K, f, diag, QW, PW, j0, q0, p0, s, feas_tol, max_iter, mult, keys, has
                 _ks.build(s, z, K, f, n, mult, keys, hashes, offs, sizes, pool, ipool, fpool,
                           meta, SB, RESP, T, skey, sfree, scoef, smeta)
         counters[C_STEPS] += 1
+        stamp(s, mult, keys, hashes, offs, meta)
         comp = 0.0
         wd = 0.0
         for i in range(n):
