@@ -14,7 +14,12 @@ when a flop count says they are cheaper than inverting afresh) and otherwise inv
 (LAPACK through numpy); :mod:`.kernel_cache` holds the inverses.  A step that keeps the
 previous step's assignment (after two steps that kept it) costs ``O(N r)`` by the responses of
 that assignment to the ``r`` directions of the period's load increments
-(:mod:`.kernel_shortcut`), checked like every other answer.  Every solve must satisfy
+(:mod:`.kernel_shortcut`), checked like every other answer.  A step whose guess fails tries
+next the assignment of the same step in the previous period, when its inverse is cached and its
+answer is strictly inside every sign check (:func:`_probe`, issue 26): on a periodic orbit the
+assignments repeat, so where many nodes change state at every step (heavy switching) a step
+costs two solves with cached inverses instead of new inverses or block updates; a full cache
+keeps the last period's answers (:func:`.kernel_cache._compact`).  Every solve must satisfy
 its equations to ``1e-3 feas_tol`` (relative) and a fresh inverse must have a 1-norm
 condition number below ``1e12``: an updated inverse that fails is recomputed afresh; an
 ill-conditioned assignment, whose explicit inverse is not backward stable, is solved once by
