@@ -20,7 +20,9 @@ from . import kernel_shortcut as _ks
 
 class KernelCache:
     """Storage of the kernel's inverse cache for one system (``cache_bytes`` bounds the pool
-    of inverses; when full the cache is cleared and refilled)."""
+    of inverses; when full the cache keeps the last period's answers, drops the rest and is
+    refilled: :func:`.kernel_cache._compact`).  It also keeps the last period's assignments as
+    the prediction of the next period with the same load (:meth:`prediction`)."""
 
     def __init__(self, n: int, cache_bytes: float, max_iter: int):
         self.n = n

@@ -6,7 +6,9 @@ its equation row: the a-row ``q_j + c_j p_j`` of a slip unknown ``j < N``, ``c_j
 separated node, the b-row ``p_j`` of a gap unknown ``N + j``) and ``M_s[i, k] = K[free_i,
 free_k] + c_i K[N + free_i, free_k]``.  Its inverse is stored in a flat pool with ``free`` and
 the row coefficients (their order is the slot's own).  A neighbouring assignment is reached
-from a stored inverse by the block updates of :mod:`.kernel_updates`.
+from a stored inverse by the block updates of :mod:`.kernel_updates`.  Each slot records the
+last step it answered (:func:`stamp`), so that a full cache keeps the inverses of the last
+period's answers, which a periodic orbit meets again (:func:`_compact`).
 """
 
 from __future__ import annotations
@@ -112,7 +114,8 @@ def _invert(M):
 
 @njit(cache=True)
 def _store(s, h, free, coef, X, gen, keys, hashes, offs, sizes, pool, ipool, fpool, meta):
-    """Cache assignment ``s`` (reset the whole cache when it is full); slot index or -1."""
+    """Cache assignment ``s``; slot index or -1.  A full cache is reset: it keeps the last
+    period's answers (:func:`_compact`), or nothing if there is still no room."""
     m = free.size
     if m * m > pool.size or m > ipool.size or meta[N_SLOTS] >= hashes.size and hashes.size == 0:
         return -1
