@@ -14,13 +14,15 @@ At ``lam = 3 lam2`` most nodes slip and many change state at every step.
 
 Each side (this tree and ``--baseline``) runs in its own subprocess (``PYTHONPATH`` set to its
 tree, one BLAS thread), ``--repeat`` times with a fresh :class:`StepSolver`: periods 1-2 from
-the zero state (one ``solve_cycles`` call), then periods 3-4 from its final state with the same
-solver (the next call; its caches warm, the orbit nearly steady).  Per step: wall time and the
-process CPU time (``time.process_time``, the one-core figure on a loaded machine), medians over
-the repeats.  "One getrs": LAPACK's pair of triangular solves with the LU of the largest
-assignment matrix of the last period (and of the median one), as ``bench_step.py --parts warm``
-measures it.  Answers: the dissipation of every period, the final slips and gaps, and the
-reactions they give, compared with the baseline relative to the run's force scale.
+the zero state (one ``solve_cycles`` call), then (untimed) up to ``--settle`` periods more with
+the same solver towards the orbit (stopping when periodic), then two more periods (or one, if
+the first is already periodic) from there with the same solver: the steady periods.  Per step:
+wall time and the process CPU time (``time.process_time``, the one-core figure on a loaded
+machine), medians over the repeats.  "One getrs": LAPACK's pair of triangular solves with the
+LU of the largest assignment matrix of the last period (and of the median one), as
+``bench_step.py --parts warm`` measures it.  Answers: the dissipation of every period, the
+final slips and gaps, and the reactions they give, compared with the baseline relative to the
+run's force scale.
 """
 
 from __future__ import annotations
@@ -73,7 +75,8 @@ def build(kind: str, seed: int, n: int) -> Path:
 
 
 def worker(a):
-    """One side: ``repeat`` x (periods 1-2, periods 3-4) with a fresh solver; getrs."""
+    """One side: ``repeat`` x (periods 1-2, settling, 2 steady periods) with a fresh solver;
+    getrs."""
     import scipy.linalg as sla
     from scipy.linalg import get_lapack_funcs
 
@@ -95,9 +98,13 @@ def worker(a):
         solver.critical  # noqa: B018
         kc = solver.kernel_cache
         runs = []
-        for phase in ("first", "steady"):
+        for phase in ("first", "settle", "steady"):
             c0 = kc.counters.copy()
             init = None if not runs else runs[-1].final_slip
+            if phase == "settle":  # untimed: towards the orbit (stops early when periodic)
+                runs.append(sd.solve_cycles(s, load, lam, max_cycles=a.settle, solver=solver,
+                                            initial_slip=init, **kw))
+                continue
             t, tc = time.perf_counter(), time.process_time()
             run = sd.solve_cycles(s, load, lam, max_cycles=2, solver=solver, initial_slip=init,
                                   **kw)
@@ -105,9 +112,9 @@ def worker(a):
             steps = run.statistics["n_steps"]
             out[phase].append(dt / steps)
             out[phase + "_cpu"].append(dc / steps)
-            out["counters"].append((kc.counters - c0).tolist())
+            out["counters"].append(((kc.counters - c0) / steps).tolist())
             runs.append(run)
-    r1, r2 = runs
+    r1, r2 = runs[0], runs[-1]
     n = s.n_nodes
     q0w, p0w = load.evaluate(0.0, lam)
     R = np.concatenate([q0w, p0w]) + s.K @ np.concatenate([r2.final_slip, r2.final_gap])
@@ -126,7 +133,8 @@ def worker(a):
                 getrs(lu[0], lu[1], rhs)
             ts.append((time.process_time() - t) / 50)
         g[label] = (int(free.size), statistics.median(ts))
-    out.update(W=r1.dissipation.tolist() + r2.dissipation.tolist(), v=r2.final_slip.tolist(),
+    out.update(W=r1.dissipation.tolist() + r2.dissipation.tolist(), settled=runs[1].status,
+               v=r2.final_slip.tolist(),
                w=r2.final_gap.tolist(), R=R.tolist(), F=float(r2.force_scale),
                diag=s.K.diagonal().tolist(), getrs=g, lam=lam, n=n,
                names=["iter", "hits", "fact", "upd", "steps", "lu", "short", "probe"])
@@ -168,6 +176,7 @@ def main():
     ap.add_argument("--out", default=None, help="write the markdown table here")
     ap.add_argument("--worker", action="store_true")
     ap.add_argument("--pkl")
+    ap.add_argument("--settle", type=int, default=6)
     a = ap.parse_args()
     if a.worker:
         print(json.dumps(worker(a)))
@@ -177,20 +186,20 @@ def main():
     load0 = os.getloadavg()
     lines = [f"Command: `OPENBLAS_NUM_THREADS=1 python3 benchmarks/bench_heavy_step.py --baseline "
              f"{a.baseline} --random {a.random} --cracks {a.cracks} --n {a.n} --repeat "
-             f"{a.repeat}`; load average at the start {load0[0]:.1f} / {load0[1]:.1f} / "
+             f"{a.repeat} --settle {a.settle}`; load average at the start {load0[0]:.1f} / {load0[1]:.1f} / "
              f"{load0[2]:.1f}.", "",
              "| system | lam2 | m max / median | getrs us (max m / median m) | periods 1-2: main "
-             "ms/step CPU (wall) | this | main / getrs | this / getrs | periods 3-4: main | this "
-             "| main / getrs | this / getrs | this: fact. / updates / probes per step (3-4) | "
-             "W diff / max W | state diff / F |",
+             "ms/step CPU (wall) | this | main / getrs | this / getrs | 2 periods after settling: main "
+             "| this | main / getrs | this / getrs | this: fact. / updates / probes per step "
+             "(settled) | W diff / max W | state diff / F |",
              "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | "
              "--- | --- |"]
     summary = []
     for kind, seed in systems:
         pk = build(kind, seed, a.n)
         lam2 = pickle.loads(pk.read_bytes())[-1]
-        b = run_worker(a.baseline, pkl=pk, repeat=a.repeat)
-        t = run_worker(ROOT, pkl=pk, repeat=a.repeat)
+        b = run_worker(a.baseline, pkl=pk, repeat=a.repeat, settle=a.settle)
+        t = run_worker(ROOT, pkl=pk, repeat=a.repeat, settle=a.settle)
         dW, dS = compare(b, t)
         gm = t["getrs"]["max"][1]
         row = {}
@@ -198,11 +207,12 @@ def main():
             for ph in ("first", "steady"):
                 row[side + ph] = statistics.median(r[ph + "_cpu"])
                 row[side + ph + "_wall"] = statistics.median(r[ph])
-        cs = np.array(t["counters"][1::2], float).mean(axis=0) / (2 * SPC)  # periods 3-4
+        cs = np.array(t["counters"][1::2], float).mean(axis=0)  # per step, the steady 2
         names = t["names"]
         per = {k: cs[names.index(k)] if k in names else 0.0 for k in ("fact", "upd", "probe")}
         lines.append(
-            f"| {kind} {seed} | {lam2:.4g} | {t['getrs']['max'][0]} / {t['getrs']['median'][0]} "
+            f"| {kind} {seed} ({t['settled']}) | {lam2:.4g} | {t['getrs']['max'][0]} / "
+            f"{t['getrs']['median'][0]} "
             f"| {1e6 * gm:.0f} / {1e6 * t['getrs']['median'][1]:.0f} | "
             f"{1e3 * row['bfirst']:.2f} ({1e3 * row['bfirst_wall']:.2f}) | "
             f"{1e3 * row['tfirst']:.2f} ({1e3 * row['tfirst_wall']:.2f}) | "
@@ -218,7 +228,7 @@ def main():
     la = os.getloadavg()
     lines += ["", "Ratios to one getrs (largest m), CPU time: periods 1-2 main median "
               f"{np.median(S[:, 0]):.0f}x (worst {S[:, 0].max():.0f}x), this {np.median(S[:, 1]):.0f}x"
-              f" (worst {S[:, 1].max():.0f}x); periods 3-4 main {np.median(S[:, 2]):.0f}x (worst "
+              f" (worst {S[:, 1].max():.0f}x); steady periods main {np.median(S[:, 2]):.0f}x (worst "
               f"{S[:, 2].max():.0f}x), this {np.median(S[:, 3]):.1f}x (worst {S[:, 3].max():.1f}x). "
               f"Largest W difference {S[:, 4].max():.1e} of max W, largest state/reaction "
               f"difference {S[:, 5].max():.1e} of the force scale.  Load average at the end "

@@ -14,12 +14,13 @@ when a flop count says they are cheaper than inverting afresh) and otherwise inv
 (LAPACK through numpy); :mod:`.kernel_cache` holds the inverses.  A step that keeps the
 previous step's assignment (after two steps that kept it) costs ``O(N r)`` by the responses of
 that assignment to the ``r`` directions of the period's load increments
-(:mod:`.kernel_shortcut`), checked like every other answer.  A step whose guess fails tries
-next the assignment of the same step in the previous period, when its inverse is cached and its
-answer is strictly inside every sign check (:func:`_probe`, issue 26): on a periodic orbit the
-assignments repeat, so where many nodes change state at every step (heavy switching) a step
-costs two solves with cached inverses instead of new inverses or block updates; a full cache
-keeps the last period's answers (:func:`.kernel_cache._compact`).  Every solve must satisfy
+(:mod:`.kernel_shortcut`), checked like every other answer.  A step whose assignment may
+change first tries the assignment of the same step in the previous period, when its inverse is
+cached and its answer is strictly inside every sign check (:func:`_probe`, issue 26): on a
+periodic orbit the assignments repeat, so where many nodes change state at every step (heavy
+switching) a step costs one solve with a cached inverse instead of an iteration through new
+inverses and block updates; a full cache keeps the last period's answers
+(:func:`.kernel_cache._compact`).  Every solve must satisfy
 its equations to ``1e-3 feas_tol`` (relative) and a fresh inverse must have a 1-norm
 condition number below ``1e12``: an updated inverse that fails is recomputed afresh; an
 ill-conditioned assignment, whose explicit inverse is not backward stable, is solved once by
@@ -201,13 +202,18 @@ def _visited(s, seen, n_seen):
 @njit(cache=True)
 def _step(s, K, f, q0, p0, n, ft, dtol, max_iter, mult, keys, hashes, offs, sizes, pool,
           ipool, fpool, meta, counters, seen, z, q, p, mag, target, g):
-    """The active-set iteration of one step from the guess ``s`` (updated in place).  When
-    the guess fails its checks, the prediction ``g`` (the step's assignment in the previous
-    period) is tried next if it differs from the guess and its inverse is cached
-    (:func:`_probe`); if it fails too, the iteration goes on from the guess as before."""
+    """The active-set iteration of one step from the guess ``s`` (updated in place).  The
+    prediction ``g`` (the step's assignment in the previous period) is tried first if it
+    differs from the guess and its inverse is cached (:func:`_probe`: accepted only strictly
+    inside its checks, where it is the assignment the iteration would end with when the step's
+    answer is unique); else the iteration runs from the guess as before."""
     n_seen = 0
     single = False
     it = 0
+    if _differ(g, s) and _probe(g, K, f, q0, p0, n, ft, dtol, mult, keys, hashes, offs, sizes,
+                                pool, ipool, fpool, meta, counters, z, q, p, mag, target):
+        s[:] = g
+        return True
     while it < max_iter:
         it += 1
         if _visited(s, seen, n_seen):
@@ -224,7 +230,6 @@ def _step(s, K, f, q0, p0, n, ft, dtol, max_iter, mult, keys, hashes, offs, size
         if _violated(s, z, q, p, f, ft, dtol, n, mag, target) <= 1.0:
             counters[C_ITER] += it
             return True
-        predict = it == 1 and _differ(g, s)
         if single:
             j = int(np.argmax(mag))
             s[j] = target[j]
@@ -232,12 +237,6 @@ def _step(s, K, f, q0, p0, n, ft, dtol, max_iter, mult, keys, hashes, offs, size
             for j in range(n):
                 if mag[j] > 1.0:
                     s[j] = target[j]
-        if predict and _differ(g, s) and _probe(g, K, f, q0, p0, n, ft, dtol, mult, keys, hashes,
-                                                offs, sizes, pool, ipool, fpool, meta, counters,
-                                                z, q, p, mag, target):
-            s[:] = g
-            counters[C_ITER] += it
-            return True
     counters[C_ITER] += it
     return False
 
@@ -339,12 +338,14 @@ def march(K, f, diag, QW, PW, j0, q0, p0, s, feas_tol, max_iter, mult, keys, has
             smeta[_ks.VALID] = 0
             trial[:] = s
             it0 = counters[C_ITER]
+            pr0 = counters[C_PROBE]
             g = PRED[j] if PRED.shape[0] == n_steps else s
             if not _step(trial, K, f, q0, p0, n, ft, dtol, max_iter, mult, keys, hashes, offs,
                          sizes, pool, ipool, fpool, meta, counters, seen, z, q, p, mag, target,
                          g):
                 return j
-            smeta[_ks.RUN] = smeta[_ks.RUN] + 1 if counters[C_ITER] - it0 == 1 else 0
+            kept = counters[C_ITER] - it0 == 1 and counters[C_PROBE] == pr0  # the guess held
+            smeta[_ks.RUN] = smeta[_ks.RUN] + 1 if kept else 0
             s[:] = trial
             if (smeta[_ks.ENABLED] and smeta[_ks.RUN] >= _ks.PERSIST and j + 1 < n_steps
                     and _ks.any_free(s)):
