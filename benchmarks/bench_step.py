@@ -236,6 +236,8 @@ def _kernel_warm(s, v, q_w, p_w, guess, med):
     ST, ACT = np.zeros((R + 1, n), np.int8), np.zeros((R, n), np.int8)
     SC, RES, WD = np.zeros(R), np.zeros(R), np.zeros(1)
     extra = () if kernel_shortcut is None else kernel_shortcut.state(n, QW, PW)
+    if hasattr(kernel, "C_PROBE"):  # no prediction from a previous period (issue 26)
+        extra = (*extra, np.zeros((0, n), np.int8))
 
     def go():
         arr[0][0] = v

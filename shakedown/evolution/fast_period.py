@@ -20,7 +20,9 @@ from . import kernel_shortcut as _ks
 
 class KernelCache:
     """Storage of the kernel's inverse cache for one system (``cache_bytes`` bounds the pool
-    of inverses; when full the cache is cleared and refilled)."""
+    of inverses; when full the cache keeps the last period's answers, drops the rest and is
+    refilled: :func:`.kernel_cache._compact`).  It also keeps the last period's assignments as
+    the prediction of the next period with the same load (:meth:`prediction`)."""
 
     def __init__(self, n: int, cache_bytes: float, max_iter: int):
         self.n = n
@@ -32,7 +34,8 @@ class KernelCache:
         slots = int(min(4096, max(64, n_doubles // max(n, 1))))
         self.keys = np.zeros((slots, n), np.int8)
         self.hashes = np.zeros(slots, np.uint64)
-        self.offs = np.zeros((slots, 3), np.int64)  # pool offset, index offset, updates
+        # pool offset, index offset, updates, step it answered last (kernel_cache.stamp)
+        self.offs = np.zeros((slots, 4), np.int64)
         self.sizes = np.zeros(slots, np.int64)
         self.ipool = np.zeros(slots * 2 * n if slots * 2 * n <= 8_000_000 else 8_000_000,
                               np.int64)
@@ -44,6 +47,26 @@ class KernelCache:
         rng = np.random.default_rng(20261123)
         self.mult = rng.integers(1, 2**63 - 1, size=n, dtype=np.int64).astype(np.uint64) | 1
         self._shortcut = None
+        self._pred = None
+
+    def prediction(self, qw: np.ndarray, pw: np.ndarray) -> np.ndarray:
+        """The assignments ``(n_steps, N)`` of the last period completed with the welded
+        reactions ``qw, pw`` (:meth:`keep_prediction`), or an empty ``(0, N)`` array."""
+        c = self._pred
+        if (c is not None and c[0].shape == qw.shape and np.array_equal(c[0], qw)
+                and np.array_equal(c[1], pw)):
+            return c[2]
+        return np.zeros((0, self.n), np.int8)
+
+    def keep_prediction(self, qw: np.ndarray, pw: np.ndarray, act: np.ndarray) -> None:
+        """Keep a completed period's assignments ``act`` (n_steps, N) as the prediction of
+        the next period with the same ``qw, pw`` (the kernel's :func:`~.kernel._probe`)."""
+        c = self._pred
+        if c is None or c[0].shape != qw.shape or not (np.array_equal(c[0], qw)
+                                                       and np.array_equal(c[1], pw)):
+            c = (qw.copy(), pw.copy(), np.empty(act.shape, np.int8))
+            self._pred = c
+        c[2][:] = act
 
     def shortcut_state(self, qw: np.ndarray, pw: np.ndarray):
         """:func:`.kernel_shortcut.state` of a period's welded reactions, kept for the next
@@ -72,10 +95,13 @@ def step_status(solver) -> str:
     return "unique" if solver.well_posed is True else "solved"
 
 
-def run_period(solver, qw, pw, v0, guess, V, Wg, Q, P, st, act, scales, res, statuses):
+def run_period(solver, qw, pw, v0, guess, V, Wg, Q, P, st, act, scales, res, statuses,
+               pred=None):
     """Steps of one period of one state; fills rows of the period arrays (as
     :func:`~.multistate._implicit_cycles` does) and returns ``(W, guess, failure)`` where
-    ``failure`` is ``(j, StepResult)`` of a failed step or ``None``."""
+    ``failure`` is ``(j, StepResult)`` of a failed step or ``None``.  ``pred``: this state's
+    assignments in its previous period (``(n_steps, N)`` int8), tried first by the kernel;
+    None: the last period completed with the same load by this solver (any state), if any."""
     kc = solver.kernel_cache
     n_steps, n = qw.shape
     V[0] = v0
@@ -89,11 +115,14 @@ def run_period(solver, qw, pw, v0, guess, V, Wg, Q, P, st, act, scales, res, sta
     K, f = _readonly(solver.K), _readonly(solver.f)
     qw, pw = np.ascontiguousarray(qw), np.ascontiguousarray(pw)
     sc = kc.shortcut_state(qw, pw)
+    pred = kc.prediction(qw, pw) if pred is None else np.ascontiguousarray(pred, np.int8)
+    if pred.shape != (n_steps, n):
+        pred = np.zeros((0, n), np.int8)
     while j < n_steps:
         done = _k.march(K, f, solver.diag, qw, pw, j, q0, p0, s, solver.feas_tol,
                         solver.max_iter, kc.mult, kc.keys, kc.hashes, kc.offs, kc.sizes,
                         kc.pool, kc.ipool, kc.fpool, kc.meta, kc.counters, kc.seen, V, Wg, Q, P,
-                        st, act, scales, res, wd, *sc)
+                        st, act, scales, res, wd, *sc, pred)
         if done > j:
             statuses[status] = statuses.get(status, 0) + done - j
         j = done
@@ -114,6 +143,7 @@ def run_period(solver, qw, pw, v0, guess, V, Wg, Q, P, st, act, scales, res, sta
             q0, p0 = solver.next_base(r.q, r.p, r.gap, qw[j + 1] - qw[j], pw[j + 1] - pw[j])
         j += 1
     _book(solver, kc, c0)
+    kc.keep_prediction(qw, pw, act)
     return wd[0], s, None
 
 
@@ -157,5 +187,6 @@ def warm_up() -> float:
     _k.march(_readonly(K), _readonly([0.5]), np.ones(2), qw, pw, 0, qw[0].copy(), pw[0].copy(),
              np.zeros(n, np.int8), 1e-9, 4, kc.mult, kc.keys, kc.hashes, kc.offs, kc.sizes,
              kc.pool, kc.ipool, kc.fpool, kc.meta, kc.counters, kc.seen, V, Wg, Q, P, st, act,
-             np.zeros(2), np.zeros(2), np.zeros(1), *_ks.state(n, qw, pw))
+             np.zeros(2), np.zeros(2), np.zeros(1), *_ks.state(n, qw, pw),
+             np.zeros((0, n), np.int8))
     return time.perf_counter() - t

@@ -14,7 +14,13 @@ when a flop count says they are cheaper than inverting afresh) and otherwise inv
 (LAPACK through numpy); :mod:`.kernel_cache` holds the inverses.  A step that keeps the
 previous step's assignment (after two steps that kept it) costs ``O(N r)`` by the responses of
 that assignment to the ``r`` directions of the period's load increments
-(:mod:`.kernel_shortcut`), checked like every other answer.  Every solve must satisfy
+(:mod:`.kernel_shortcut`), checked like every other answer.  A step whose assignment may
+change first tries the assignment of the same step in the previous period, when its inverse is
+cached and its answer is strictly inside every sign check (:func:`_probe`, issue 26): on a
+periodic orbit the assignments repeat, so where many nodes change state at every step (heavy
+switching) a step costs one solve with a cached inverse instead of an iteration through new
+inverses and block updates; a full cache keeps the last period's answers
+(:func:`.kernel_cache._compact`).  Every solve must satisfy
 its equations to ``1e-3 feas_tol`` (relative) and a fresh inverse must have a 1-norm
 condition number below ``1e12``: an updated inverse that fails is recomputed afresh; an
 ill-conditioned assignment, whose explicit inverse is not backward stable, is solved once by
@@ -44,6 +50,7 @@ from .kernel_cache import (
     N_SLOTS,
     SEPARATED,
     STICK,
+    WINDOW,
     _hash,
     _invert,
     _layout,
@@ -53,6 +60,7 @@ from .kernel_cache import (
     _solve_lu,
     _solve_with,
     _store,
+    stamp,
 )
 from .kernel_jit import HAVE_KERNEL, njit
 from .kernel_updates import changed_unknowns, updated
@@ -72,7 +80,7 @@ UPDATE_MIN_SIZE = 8
 __all__ = ["march", "HAVE_KERNEL"]
 
 # counter indices
-C_ITER, C_HITS, C_FACT, C_UPD, C_STEPS, C_LU, C_SHORT = 0, 1, 2, 3, 4, 5, 6
+C_ITER, C_HITS, C_FACT, C_UPD, C_STEPS, C_LU, C_SHORT, C_PROBE = 0, 1, 2, 3, 4, 5, 6, 7
 
 
 @njit(cache=True)
@@ -193,11 +201,19 @@ def _visited(s, seen, n_seen):
 
 @njit(cache=True)
 def _step(s, K, f, q0, p0, n, ft, dtol, max_iter, mult, keys, hashes, offs, sizes, pool,
-          ipool, fpool, meta, counters, seen, z, q, p, mag, target):
-    """The active-set iteration of one step from the guess ``s`` (updated in place)."""
+          ipool, fpool, meta, counters, seen, z, q, p, mag, target, g):
+    """The active-set iteration of one step from the guess ``s`` (updated in place).  The
+    prediction ``g`` (the step's assignment in the previous period) is tried first if it
+    differs from the guess and its inverse is cached (:func:`_probe`: accepted only strictly
+    inside its checks, where it is the assignment the iteration would end with when the step's
+    answer is unique); else the iteration runs from the guess as before."""
     n_seen = 0
     single = False
     it = 0
+    if _differ(g, s) and _probe(g, K, f, q0, p0, n, ft, dtol, mult, keys, hashes, offs, sizes,
+                                pool, ipool, fpool, meta, counters, z, q, p, mag, target):
+        s[:] = g
+        return True
     while it < max_iter:
         it += 1
         if _visited(s, seen, n_seen):
@@ -226,6 +242,39 @@ def _step(s, K, f, q0, p0, n, ft, dtol, max_iter, mult, keys, hashes, offs, size
 
 
 @njit(cache=True)
+def _probe(g, K, f, q0, p0, n, ft, dtol, mult, keys, hashes, offs, sizes, pool, ipool, fpool,
+           meta, counters, z, q, p, mag, target):
+    """The predicted assignment ``g`` (the same step's of the previous period) as this step's
+    answer, when its inverse is cached: its equations to ``EQ_TOL`` and its sign checks, every
+    node's by a margin of the tolerance (its state strict, not at a boundary).  True (``z, q,
+    p`` filled) when it passes; no inverse is computed or updated for a prediction."""
+    k = _lookup(g, _hash(g, mult), keys, hashes, meta)
+    if k < 0:
+        return False
+    X, free, coef = _slot(k, offs, sizes, pool, ipool, fpool)
+    if not _solve_with(X, free, coef, K, q0, p0, n, z, q, p) <= EQ_TOL * ft:
+        return False
+    # strictly inside its checks at every node (no node at a state boundary, where another
+    # assignment gives the same answer): then the answer's states determine the assignment,
+    # and it is the one the iteration from the guess ends with (when the answer is unique)
+    if not _violated(g, z, q, p, f, ft, dtol, n, mag, target) < -1.0:
+        return False
+    meta[LAST_SLOT] = k
+    counters[C_ITER] += 1
+    counters[C_HITS] += 1
+    counters[C_PROBE] += 1
+    return True
+
+
+@njit(cache=True)
+def _differ(a, b):
+    for j in range(a.size):
+        if a[j] != b[j]:
+            return True
+    return False
+
+
+@njit(cache=True)
 def _maxabs(x):
     a = 0.0
     for v in x:
@@ -236,7 +285,7 @@ def _maxabs(x):
 @njit(cache=True)
 def march(K, f, diag, QW, PW, j0, q0, p0, s, feas_tol, max_iter, mult, keys, hashes, offs,
           sizes, pool, ipool, fpool, meta, counters, seen, V, WG, Q, P, ST, ACT, SC, RES, WD,
-          SB, SCc, RESP, T, skey, sfree, scoef, smeta):
+          SB, SCc, RESP, T, skey, sfree, scoef, smeta, PRED):
     """Implicit steps ``j0 .. K-1`` of one period of one state (see the module docstring).
 
     ``q0, p0``: the base reactions of step ``j0`` (updated in place to those of the step
@@ -245,7 +294,11 @@ def march(K, f, diag, QW, PW, j0, q0, p0, s, feas_tol, max_iter, mult, keys, has
     dissipation to ``WD[0]``.  Returns the number of steps done (``K`` when the period is
     complete; otherwise the index of the step handed back to Python).  ``SB .. smeta``: the
     state of :mod:`.kernel_shortcut` (:func:`~.kernel_shortcut.state`), for the steps that keep
-    the previous step's assignment.
+    the previous step's assignment.  ``PRED`` (``(K, N)`` int8, or ``(0, N)`` for none): the
+    assignments of the same steps in the previous period; a step whose assignment differs from
+    the previous step's first tries ``PRED[j]`` when its inverse is cached (:func:`_probe`: in a
+    steady cycle the assignments repeat, so a step costs one solve with a cached inverse
+    instead of an active-set iteration through new assignments), else iterates as before.
     """
     n = f.size
     n_steps = QW.shape[0]
@@ -258,6 +311,7 @@ def march(K, f, diag, QW, PW, j0, q0, p0, s, feas_tol, max_iter, mult, keys, has
     mag = np.empty(n)
     target = np.empty(n, np.int8)
     trial = s.copy()
+    meta[WINDOW] = n_steps  # a reset keeps the answers of the last period (kernel_cache)
     smeta[_ks.VALID] = 0  # no answer of this call yet
     smeta[_ks.RUN] = 0
     for j in range(j0, n_steps):
@@ -284,16 +338,21 @@ def march(K, f, diag, QW, PW, j0, q0, p0, s, feas_tol, max_iter, mult, keys, has
             smeta[_ks.VALID] = 0
             trial[:] = s
             it0 = counters[C_ITER]
+            pr0 = counters[C_PROBE]
+            g = PRED[j] if PRED.shape[0] == n_steps else s
             if not _step(trial, K, f, q0, p0, n, ft, dtol, max_iter, mult, keys, hashes, offs,
-                         sizes, pool, ipool, fpool, meta, counters, seen, z, q, p, mag, target):
+                         sizes, pool, ipool, fpool, meta, counters, seen, z, q, p, mag, target,
+                         g):
                 return j
-            smeta[_ks.RUN] = smeta[_ks.RUN] + 1 if counters[C_ITER] - it0 == 1 else 0
+            kept = counters[C_ITER] - it0 == 1 and counters[C_PROBE] == pr0  # the guess held
+            smeta[_ks.RUN] = smeta[_ks.RUN] + 1 if kept else 0
             s[:] = trial
             if (smeta[_ks.ENABLED] and smeta[_ks.RUN] >= _ks.PERSIST and j + 1 < n_steps
                     and _ks.any_free(s)):
                 _ks.build(s, z, K, f, n, mult, keys, hashes, offs, sizes, pool, ipool, fpool,
                           meta, SB, RESP, T, skey, sfree, scoef, smeta)
         counters[C_STEPS] += 1
+        stamp(s, mult, keys, hashes, offs, meta)
         comp = 0.0
         wd = 0.0
         for i in range(n):

@@ -6,7 +6,9 @@ its equation row: the a-row ``q_j + c_j p_j`` of a slip unknown ``j < N``, ``c_j
 separated node, the b-row ``p_j`` of a gap unknown ``N + j``) and ``M_s[i, k] = K[free_i,
 free_k] + c_i K[N + free_i, free_k]``.  Its inverse is stored in a flat pool with ``free`` and
 the row coefficients (their order is the slot's own).  A neighbouring assignment is reached
-from a stored inverse by the block updates of :mod:`.kernel_updates`.
+from a stored inverse by the block updates of :mod:`.kernel_updates`.  Each slot records the
+last step it answered (:func:`stamp`), so that a full cache keeps the inverses of the last
+period's answers, which a periodic orbit meets again (:func:`_compact`).
 """
 
 from __future__ import annotations
@@ -19,7 +21,9 @@ STICK, FORWARD, BACKWARD, SEPARATED = 0, 1, 2, 3
 #: Largest accepted 1-norm condition number of an assignment matrix (inverse kept in cache).
 COND_MAX = 1e12
 # meta indices
-N_SLOTS, POOL_USED, IPOOL_USED, LAST_SLOT, RESETS = 0, 1, 2, 3, 4
+N_SLOTS, POOL_USED, IPOOL_USED, LAST_SLOT, RESETS, CLOCK, WINDOW = 0, 1, 2, 3, 4, 5, 6
+#: Fraction of the pool that the inverses kept through a reset may fill (:func:`_compact`).
+KEEP_FRACTION = 0.75
 
 
 @njit(cache=True)
@@ -110,22 +114,27 @@ def _invert(M):
 
 @njit(cache=True)
 def _store(s, h, free, coef, X, gen, keys, hashes, offs, sizes, pool, ipool, fpool, meta):
-    """Cache assignment ``s`` (reset the whole cache when it is full); slot index or -1."""
+    """Cache assignment ``s``; slot index or -1.  A full cache is reset: it keeps the last
+    period's answers (:func:`_compact`), or nothing if there is still no room."""
     m = free.size
     if m * m > pool.size or m > ipool.size or meta[N_SLOTS] >= hashes.size and hashes.size == 0:
         return -1
     if (meta[N_SLOTS] >= hashes.size or meta[POOL_USED] + m * m > pool.size
             or meta[IPOOL_USED] + m > ipool.size):
-        meta[N_SLOTS] = 0
-        meta[POOL_USED] = 0
-        meta[IPOOL_USED] = 0
-        meta[RESETS] += 1
+        _compact(keys, hashes, offs, sizes, pool, ipool, fpool, meta)
+        if (meta[N_SLOTS] >= hashes.size or meta[POOL_USED] + m * m > pool.size
+                or meta[IPOOL_USED] + m > ipool.size):
+            meta[N_SLOTS] = 0
+            meta[POOL_USED] = 0
+            meta[IPOOL_USED] = 0
+            meta[LAST_SLOT] = -1
     k = meta[N_SLOTS]
     keys[k, :] = s
     hashes[k] = h
     offs[k, 0] = meta[POOL_USED]
     offs[k, 1] = meta[IPOOL_USED]
     offs[k, 2] = gen
+    offs[k, 3] = -1  # not yet the answer of a step (:func:`stamp`)
     sizes[k] = m
     o = meta[POOL_USED]
     pool[o:o + m * m] = X.ravel()
@@ -137,6 +146,58 @@ def _store(s, h, free, coef, X, gen, keys, hashes, offs, sizes, pool, ipool, fpo
     meta[N_SLOTS] += 1
     meta[LAST_SLOT] = k
     return k
+
+
+@njit(cache=True)
+def stamp(s, mult, keys, hashes, offs, meta):
+    """Mark the inverse of assignment ``s`` (if cached) as the answer of the step numbered
+    ``meta[CLOCK]`` (then advanced): kept through a reset while in the last ``meta[WINDOW]``
+    steps (:func:`_compact`)."""
+    k = _lookup(s, _hash(s, mult), keys, hashes, meta)
+    if k >= 0:
+        offs[k, 3] = meta[CLOCK]
+    meta[CLOCK] += 1
+
+
+@njit(cache=True)
+def _compact(keys, hashes, offs, sizes, pool, ipool, fpool, meta):
+    """The reset of a full cache: keep (moved to the front, in order) the inverses that
+    answered one of the last ``meta[WINDOW]`` steps (:func:`stamp`), within
+    :data:`KEEP_FRACTION` of the pool, and drop the others (the active-set iterates that were
+    not answers, older answers).  A steady cycle's next period then finds each step's
+    assignment of this period (:func:`.kernel._probe`) instead of recomputing them."""
+    meta[RESETS] += 1
+    oldest = meta[CLOCK] - meta[WINDOW]
+    budget = KEEP_FRACTION * pool.size
+    last = meta[LAST_SLOT]
+    meta[LAST_SLOT] = -1
+    nk, po, io = 0, 0, 0
+    for k in range(meta[N_SLOTS]):
+        m = sizes[k]
+        if offs[k, 3] < 0 or offs[k, 3] < oldest or po + m * m > budget:
+            continue
+        o, oi = offs[k, 0], offs[k, 1]
+        for t in range(m * m):  # forward copy to a lower offset: safe when overlapping
+            pool[po + t] = pool[o + t]
+        for t in range(m):
+            ipool[io + t] = ipool[oi + t]
+            fpool[io + t] = fpool[oi + t]
+        if nk != k:
+            keys[nk, :] = keys[k]
+            hashes[nk] = hashes[k]
+            offs[nk, 2] = offs[k, 2]
+            offs[nk, 3] = offs[k, 3]
+            sizes[nk] = m
+        offs[nk, 0] = po
+        offs[nk, 1] = io
+        if k == last:
+            meta[LAST_SLOT] = nk
+        nk += 1
+        po += m * m
+        io += m
+    meta[N_SLOTS] = nk
+    meta[POOL_USED] = po
+    meta[IPOOL_USED] = io
 
 
 @njit(cache=True)

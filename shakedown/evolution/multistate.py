@@ -210,6 +210,7 @@ class _Track:
         self.history = None
         self.period = 0
         self.base = None  # the base factor of this state's low-rank updates
+        self.last_act = None  # the kernel's assignments of the last period
 
     @property
     def running(self):
@@ -245,10 +246,12 @@ def _implicit_cycles(solver, c, tracks, qw, pw, load, lam):
             res[:] = 0.0
             Wd[i], guesses[i], failed = fast_period.run_period(
                 solver, qw, pw, V[i, 0], guesses[i], V[i], Wg[i], Q[i], P[i], st[i], act[i],
-                scales[i], res, tr.statuses)
+                scales[i], res, tr.statuses, pred=tr.last_act)
             worst[i] = max(worst[i], float(res.max()))
             if failed is not None:
                 fail[i] = failed
+            else:
+                tr.last_act = act[i]  # the next period's prediction (kernel's probe)
         alive = alive[:0]
     for j in range(n_steps if alive.size else 0):
         bases = [tracks[i].base for i in alive]
