@@ -67,8 +67,9 @@ class SurfaceCompliance:
         return np.asarray(q, float).T.reshape(2, self.n, self.n)
 
     def tt(self, q):
-        fq = self._fwd(self._grid_q(q))
-        u = self._inv(np.einsum("abij,bij->aij", self._tt, fq))
+        fx, fy = self._fwd(self._grid_q(q))
+        h = self._tt
+        u = self._inv(np.stack([h[0, 0] * fx + h[0, 1] * fy, h[1, 0] * fx + h[1, 1] * fy]))
         return u.reshape(2, -1).T
 
     def tz(self, p):
