@@ -4,6 +4,7 @@ Run:  OPENBLAS_NUM_THREADS=1 python benchmarks/bench_half_space.py hertz
       OPENBLAS_NUM_THREADS=1 python benchmarks/bench_half_space.py operator
       OPENBLAS_NUM_THREADS=1 python benchmarks/bench_half_space.py matrix_free --case similar
       OPENBLAS_NUM_THREADS=1 python benchmarks/bench_half_space.py matrix_free --case coupled
+      OPENBLAS_NUM_THREADS=1 python benchmarks/bench_half_space.py lam2
 Prints markdown tables (copied into benchmarks/RESULTS_half_space.md).
 
 Hertz: sphere R = 1, E1 = E2 = 1, nu = 0.3 (E* = 0.5495), P = 1e-3, window 3 a (the contact
@@ -231,9 +232,40 @@ def matrix_free(ns, case="similar", S=40, dense_max=24, reps=3, reps_max=64):
                   f"| {cmp} |", flush=True)
 
 
+def lam2(ns, dense_max=24, X=0.3, Y=0.15):
+    """Melan's lam2 of a fretting load (similar materials, nu = 0.3, window 2.4 a): matrix-free
+    per-node construction against the dense cone engine on the contact-cell system (CPU times)."""
+    from shakedown.models.half_space.bounds import contact_system_dense, fretting_lam2
+
+    f = 0.5
+    a = float(cont.hertz_radius(P, R, E_STAR))
+    print(f"Q = lam ({X} f P cos, {Y} f P sin), P = {P}, f = {f}")
+    print("| n | cells | contact cells | lam2 matrix-free | CG its | CPU [s] | lam2 dense cone engine "
+          "[lower, upper] | CPU [s] (build + bounds) | rel. difference |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for n in ns:
+        m = sd.half_space_model(radius=R, n_cells=n, width=2.4 * a, friction=f, materials=MATS)
+        c0 = time.process_time()
+        mf = fretting_lam2(m, P, X * f * P, Y * f * P)
+        c_mf = time.process_time() - c0
+        dense = "- | - | -"
+        if n <= dense_max:
+            c0 = time.process_time()
+            system, welded, _ = contact_system_dense(m, mf.contact)
+            q0, p0 = welded(0.0, 0.0, P)
+            ux, uy = welded(1.0, 0.0, P)[0] - q0, welded(0.0, 1.0, P)[0] - q0
+            load = sd.LoadCycle.from_harmonics(q0, p0, q_cos=X * f * P * ux, q_sin=Y * f * P * uy)
+            b = sd.shakedown_bounds(system, load, only=["lam2"])
+            c_d = time.process_time() - c0
+            dense = (f"{b.lam2:.8g} [{b.lam2_lower:.8g}, {b.lam2_upper:.8g}] | {c_d:.1f} | "
+                     f"{mf.lam2 / b.lam2 - 1:+.1e}")
+        print(f"| {n} | {n * n} | {int(mf.contact.sum())} | {mf.lam2:.8g} | {mf.cg_iterations} | "
+              f"{c_mf:.2f} | {dense} |", flush=True)
+
+
 if __name__ == "__main__":
     ap = argparse.ArgumentParser()
-    ap.add_argument("what", choices=["hertz", "operator", "matrix_free", "one"])
+    ap.add_argument("what", choices=["hertz", "operator", "matrix_free", "one", "lam2"])
     ap.add_argument("--ns", type=int, nargs="*", default=None)
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--case", choices=sorted(CASES), default="similar")
@@ -253,6 +285,8 @@ if __name__ == "__main__":
         hertz([15, 31] if a.quick else [15, 31, 63, 127, 255])
     elif a.what == "operator":
         operator(a.ns or ([8, 16] if a.quick else [8, 16, 24, 32, 48, 64, 128, 256]))
+    elif a.what == "lam2":
+        lam2(a.ns or [16, 24, 32, 48, 64, 128], dense_max=a.dense_max)
     else:
         matrix_free(a.ns or [16, 24, 32, 48, 64, 128], case=a.case, S=a.S, dense_max=a.dense_max,
                     reps=a.reps)
