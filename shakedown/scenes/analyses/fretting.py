@@ -1,8 +1,10 @@
 """The ``fretting`` analysis of a ``half_space`` scene: the steady cycle of a sphere on a flat.
 
 ``[analyses.fretting]`` takes the scene's load (constant ``P0``; ``P1`` must be 0), reaches the
-steady cycle with :func:`shakedown.studies.half_space.fretting_run` from Mindlin's first loading
-(``P0``, then ``Q_x`` up to its amplitude) and writes
+steady cycle with :func:`shakedown.studies.half_space.fretting_run` (dense) or
+:func:`~shakedown.studies.half_space.fretting_run_fft` (matrix-free: ``engine = "fft"``, and
+``"auto"`` above :data:`~shakedown.models.half_space.DENSE_MAX_CELLS` cells) from Mindlin's first
+loading (``P0``, then ``Q_x`` up to its amplitude) and writes
 
 * ``fretting.json`` -- ``W`` per cycle, the steady ``W``, periods to steady, the continuum
   references (Hertz ``a``, Mindlin-Deresiewicz ``W`` and stick radius where they apply: an
@@ -25,6 +27,8 @@ OPTIONS = {
     "max_cycles": (int, 10, "largest number of cycles simulated"),
     "tol": (float, 1e-9, "relative change of the cycle-start state that counts as steady"),
     "plots": (bool, True, "write PNG plots"),
+    "engine": (str, "auto", "'dense' (cone engine on the condensed stiffness), 'fft' (matrix-free "
+               "FFT steps) or 'auto' (fft above DENSE_MAX_CELLS cells)"),
 }
 
 
@@ -45,8 +49,21 @@ def run(ctx, options: dict) -> dict:
     if options["steps_per_cycle"] < 4 or options["max_cycles"] < 1:
         raise SceneError("[analyses.fretting] steps_per_cycle must be >= 4 and max_cycles >= 1")
     P0, Qx, Qy = _load_amplitudes(ctx)
-    run_, loop = hs.fretting_run(model, P0, Qx, Qy, steps_per_cycle=options["steps_per_cycle"],
-                                 max_cycles=options["max_cycles"], tol=options["tol"])
+    from ...models.half_space import DENSE_MAX_CELLS
+
+    engine = options["engine"]
+    if engine not in ("auto", "dense", "fft"):
+        raise SceneError(f"[analyses.fretting] engine must be 'auto', 'dense' or 'fft', got {engine!r}")
+    if engine == "auto":
+        engine = "fft" if model.n_cells > DENSE_MAX_CELLS else "dense"
+    kw = dict(steps_per_cycle=options["steps_per_cycle"], max_cycles=options["max_cycles"],
+              tol=options["tol"])
+    if engine == "fft":
+        run_, loop = hs.fretting_run_fft(model, P0, Qx, Qy, **kw)
+        stuck_cells = np.asarray(run_.stuck_cells, int)
+    else:
+        run_, loop = hs.fretting_run(model, P0, Qx, Qy, **kw)
+        stuck_cells = np.r_[model.keep[np.asarray(run_.stuck_nodes, int)], model.reference]
     qm = loop["q_full"][:, model.reference]
     pm = loop["p_full"][:, model.reference]
     ref_margin = float(np.max((np.linalg.norm(qm, axis=-1) - model.friction * pm) / P0))
@@ -55,7 +72,7 @@ def run(ctx, options: dict) -> dict:
         "steady_dissipation": float(run_.steady_dissipation),
         "dissipation_per_cycle": [float(w) for w in run_.dissipation],
         "cycles_to_steady": int(run_.cycles_to_steady), "period": int(run_.period),
-        "status": str(run_.status), "n_stuck_cells": int(len(run_.stuck_nodes)) + 1,
+        "status": str(run_.status), "n_stuck_cells": int(len(stuck_cells)), "engine": engine,
         "reference_cell_margin": ref_margin, "reference_cell_ok": bool(ref_margin <= 1e-9),
         "W_loop": float(loop["W_loop"]),
     }
@@ -87,11 +104,11 @@ def run(ctx, options: dict) -> dict:
         "q_x": loop["q_full"][..., 0].ravel(), "q_y": loop["q_full"][..., 1].ravel(),
         "p": loop["p_full"].ravel(), "state": np.asarray(loop["states"]).ravel()}))
     if options["plots"]:
-        _plots(ctx, model, run_, loop, a, c, f * P0)
+        _plots(ctx, model, stuck_cells, loop, a, c, f * P0)
     return {k: summary[k] for k in ("verdict", "steady_dissipation", "cycles_to_steady", "status")}
 
 
-def _plots(ctx, model, run_, loop, a, c, fP):
+def _plots(ctx, model, cells, loop, a, c, fP):
     import matplotlib.pyplot as plt
 
     from ...plotting import half_space as ph
@@ -107,7 +124,6 @@ def _plots(ctx, model, run_, loop, a, c, fP):
     fig.tight_layout()
     ctx.output.save_figure("contact_maps.png", fig)
     fig, ax = plt.subplots(figsize=(5, 5))
-    cells = np.r_[model.keep[np.asarray(run_.stuck_nodes, int)], model.reference]
     ph.plot_stuck_zone(model, cells, a=a, c_pred=c, zoom=zoom, ax=ax)
     ctx.output.save_figure("stuck_zone.png", fig)
     fig, axs = plt.subplots(1, 2, figsize=(11, 4.2))
