@@ -135,7 +135,7 @@ def _case_model(case, n, f=0.5):
                                materials=c["mats"]), c, f
 
 
-def run_one(case, n, engine, S, out_file):
+def run_one(case, n, engine, S, out_file, cycles=None):
     """One run in this process (CPU, wall, peak RSS of the process); arrays saved to ``out_file``."""
     import json
     import resource
@@ -144,6 +144,7 @@ def run_one(case, n, engine, S, out_file):
     from shakedown.studies import half_space as hs
 
     m, c, f = _case_model(case, n)
+    c = dict(c, cycles=cycles or c["cycles"])
     t = (np.arange(S) + 1) / S
     Qx, Qy = c["X"] * f * P * np.cos(2 * np.pi * t), c["Y"] * f * P * np.sin(2 * np.pi * t)
     Ps = P + c["P1"] * P * np.cos(2 * np.pi * t + 0.6)
@@ -178,7 +179,7 @@ def run_one(case, n, engine, S, out_file):
                           cycles=len(W), load=os.getloadavg()[0], **info)))
 
 
-def matrix_free(ns, case="similar", S=40, dense_max=24, reps=3, reps_max=64):
+def matrix_free(ns, case="similar", S=40, dense_max=24, reps=3, reps_max=64, cycles=None):
     """Dense cone engine and matrix-free steps side by side, each run in its own process (peak RSS
     per run): CPU time (robust to the shared machine's load), wall time, agreement.  The FFT runs
     are repeated ``reps`` times up to ``n = reps_max`` (median and, in brackets, the worst); the
@@ -201,7 +202,7 @@ def matrix_free(ns, case="similar", S=40, dense_max=24, reps=3, reps_max=64):
         for engine in (("dense", "fft") if n <= dense_max else ("fft",)):
             fn = os.path.join(tmp, f"{case}_{n}_{engine}.npz")
             cmd = [sys.executable, __file__, "one", "--case", case, "--n", str(n), "--engine",
-                   engine, "--S", str(S), "--out", fn]
+                   engine, "--S", str(S), "--out", fn] + (["--cycles", str(cycles)] if cycles else [])
             runs = []
             for _ in range(reps if (engine == "fft" and n <= reps_max) else 1):
                 line = subprocess.run(cmd, capture_output=True, text=True, check=True).stdout
@@ -275,9 +276,10 @@ if __name__ == "__main__":
     ap.add_argument("--engine", choices=["fft", "dense"])
     ap.add_argument("--S", type=int, default=40)
     ap.add_argument("--out")
+    ap.add_argument("--cycles", type=int, default=None)
     a = ap.parse_args()
     if a.what == "one":
-        run_one(a.case, a.n, a.engine, a.S, a.out)
+        run_one(a.case, a.n, a.engine, a.S, a.out, a.cycles)
         raise SystemExit
     print(f"# OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS')}; "
           f"load: {os.getloadavg()}")
@@ -289,4 +291,4 @@ if __name__ == "__main__":
         lam2(a.ns or [16, 24, 32, 48, 64, 128], dense_max=a.dense_max)
     else:
         matrix_free(a.ns or [16, 24, 32, 48, 64, 128], case=a.case, S=a.S, dense_max=a.dense_max,
-                    reps=a.reps)
+                    reps=a.reps, cycles=a.cycles)
