@@ -2,6 +2,9 @@
 
 Run:  OPENBLAS_NUM_THREADS=1 python benchmarks/bench_half_space.py hertz
       OPENBLAS_NUM_THREADS=1 python benchmarks/bench_half_space.py operator
+      OPENBLAS_NUM_THREADS=1 python benchmarks/bench_half_space.py matrix_free --case similar
+      OPENBLAS_NUM_THREADS=1 python benchmarks/bench_half_space.py matrix_free --case coupled
+      OPENBLAS_NUM_THREADS=1 python benchmarks/bench_half_space.py lam2
 Prints markdown tables (copied into benchmarks/RESULTS_half_space.md).
 
 Hertz: sphere R = 1, E1 = E2 = 1, nu = 0.3 (E* = 0.5495), P = 1e-3, window 3 a (the contact
@@ -117,52 +120,175 @@ def operator(ns, dense_max=32):
         print(f"| {n} | {n * n} | {3 * n * n} | {1e3 * t_fft:.2f} | {dense}")
 
 
-def matrix_free(ns, S=40, X=0.5, dense_max=16):
-    """Steady fretting cycle (Q oscillating at 0.5 f P, nu = 0, window 2.4 a) matrix-free, with the
-    dense cone engine beside it up to ``dense_max``: CPU time (robust to the shared machine's load)
-    and peak resident memory of this process."""
+CASES = {
+    # similar materials (nu = 0, Mindlin exact), constant P, Q oscillating at 0.5 f P, window 2.4 a
+    "similar": dict(mats=((E, 0.0), (E, 0.0)), P1=0.0, X=0.5, Y=0.0, width=2.4, cycles=4),
+    # rigid sphere on nu = 0.3 (beta = 0.29), P = P0 (1 + 0.3 cos(2 pi t + 0.6)), elliptical Q
+    "coupled": dict(mats=((E, 0.3), (np.inf, 0.0)), P1=0.3, X=0.4, Y=0.2, width=2.6, cycles=2),
+}
+
+
+def _case_model(case, n, f=0.5):
+    c = CASES[case]
+    a = float(cont.hertz_radius(P * (1 + c["P1"]), R, E / 2))
+    return sd.half_space_model(radius=R, n_cells=n, width=c["width"] * a, friction=f,
+                               materials=c["mats"]), c, f
+
+
+def run_one(case, n, engine, S, out_file, cycles=None):
+    """One run in this process (CPU, wall, peak RSS of the process); arrays saved to ``out_file``."""
+    import json
     import resource
 
-    from shakedown.models.half_space.matrix_free import fretting_cycles_fft
+    from shakedown.models.half_space.matrix_free import fretting_cycles_fft, path_fft
     from shakedown.studies import half_space as hs
 
-    mats = ((E, 0.0), (E, 0.0))
-    a = float(cont.hertz_radius(P, R, E / 2))
-    f = 0.5
+    m, c, f = _case_model(case, n)
+    c = dict(c, cycles=cycles or c["cycles"])
     t = (np.arange(S) + 1) / S
-    print("| n | cells | 2a/h | W / W_MD - 1 | cycles | FISTA iterations per step (median, max) "
-          "| CPU [s] FFT | CPU [s] dense (build + run) | W_fft / W_dense - 1 | peak RSS [MB] |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    Qx, Qy = c["X"] * f * P * np.cos(2 * np.pi * t), c["Y"] * f * P * np.sin(2 * np.pi * t)
+    Ps = P + c["P1"] * P * np.cos(2 * np.pi * t + 0.6)
+    tol = 1e-9 if case == "similar" else 1e-14
+    c0, w0 = time.process_time(), time.perf_counter()
+    info = {}
+    if engine == "fft":
+        q0 = p0 = None
+        if m.beta != 0:
+            q0, p0 = path_fft(m, [(0.0, 0.0, P)])[-1]
+        out = fretting_cycles_fft(m, P, Qx, Qy, P_samples=Ps, max_cycles=c["cycles"], tol=tol,
+                                  q0=q0, p0=p0)
+        W, q, p = out["W"], out["q"][-1], out["p"][-1]
+        it = np.array(out["iterations"])
+        info = dict(its_median=float(np.median(it)), its_max=int(it.max()),
+                    passes=float(np.median(out["passes"])), residual=out["residual"])
+    else:
+        start = hs.static_path(m, [(0.0, 0.0, P)])[-1]
+        run = sd.solve_cycles(m.system, m.load_cycle(P0=P, P1=c["P1"] * P, Qx=c["X"] * f * P,
+                                                     Qy=c["Y"] * f * P, phase=0.6), 1.0,
+                              initial_slip=start[0].slip, initial_gap=start[0].gap,
+                              steps_per_cycle=S, max_cycles=c["cycles"], tol=tol)
+        W = np.asarray(run.dissipation)
+        tab = run.steady_table.sort_values(["t", "node"])
+        qr = tab[["q_x", "q_y"]].to_numpy().reshape(-1, m.n_cells - 1, 2)[-1]
+        pr = tab["p"].to_numpy().reshape(-1, m.n_cells - 1)[-1]
+        q, p = hs.full_reactions(m, qr, pr, Qx[-1], Qy[-1], Ps[-1])
+    cpu, wall = time.process_time() - c0, time.perf_counter() - w0
+    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    np.savez(out_file, W=W, q=q, p=p)
+    print(json.dumps(dict(case=case, n=n, engine=engine, cpu=cpu, wall=wall, rss=rss,
+                          cycles=len(W), load=os.getloadavg()[0], **info)))
+
+
+def matrix_free(ns, case="similar", S=40, dense_max=24, reps=3, reps_max=64, cycles=None):
+    """Dense cone engine and matrix-free steps side by side, each run in its own process (peak RSS
+    per run): CPU time (robust to the shared machine's load), wall time, agreement.  The FFT runs
+    are repeated ``reps`` times up to ``n = reps_max`` (median and, in brackets, the worst); the
+    dense runs once."""
+    import json
+    import subprocess
+    import sys
+    import tempfile
+
+    print(f"case {case}: {CASES[case]}; S = {S} steps per cycle")
+    print("| n | cells | 2a/h | engine | cycles | W_last / W_MD - 1 | FISTA its (median, max) | passes "
+          "| runs | CPU [s] (max) | wall [s] (max) | peak RSS [MB] | load | W_fft/W_dense - 1 "
+          "| max dq/(f P), dp/P |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    tmp = tempfile.mkdtemp()
     for n in ns:
-        m = sd.half_space_model(radius=R, n_cells=n, width=2.4 * a, friction=f, materials=mats)
+        m, c, f = _case_model(case, n)
+        a = float(cont.hertz_radius(P, R, E / 2))
+        res = {}
+        for engine in (("dense", "fft") if n <= dense_max else ("fft",)):
+            fn = os.path.join(tmp, f"{case}_{n}_{engine}.npz")
+            cmd = [sys.executable, __file__, "one", "--case", case, "--n", str(n), "--engine",
+                   engine, "--S", str(S), "--out", fn] + (["--cycles", str(cycles)] if cycles else [])
+            runs = []
+            for _ in range(reps if (engine == "fft" and n <= reps_max) else 1):
+                line = subprocess.run(cmd, capture_output=True, text=True, check=True).stdout
+                runs.append(json.loads(line.strip().splitlines()[-1]))
+            r = dict(runs[0])
+            for key in ("cpu", "wall", "rss", "load"):
+                vals = [x[key] for x in runs]
+                r[key], r[key + "_max"] = float(np.median(vals)), float(np.max(vals))
+            r["reps"] = len(runs)
+            res[engine] = (r, np.load(fn))
+        for engine, (r, arr) in res.items():
+            W = arr["W"]
+            md = "-"
+            if case == "similar":
+                md = f"{W[-1] / float(cont.mindlin_deresiewicz_dissipation(c['X'] * f * P, P, f, a, cont.tangential_compliance_constant(c['mats']))) - 1:+.2e}"  # noqa: E501
+            cmp = "- | -"
+            if engine == "fft" and "dense" in res:
+                d = res["dense"][1]
+                k = min(len(W), len(d["W"]))
+                cmp = (f"{np.max(np.abs(W[:k] / d['W'][:k] - 1)):.1e} | "
+                       f"{np.abs(arr['q'] - d['q']).max() / (f * P):.1e}, "
+                       f"{np.abs(arr['p'] - d['p']).max() / P:.1e}")
+            its = f"{r['its_median']:.0f}, {r['its_max']}" if engine == "fft" else "-"
+            passes = f"{r['passes']:.0f}" if engine == "fft" else "-"
+            print(f"| {n} | {n * n} | {2 * a / m.h:.1f} | {engine} | {r['cycles']} | {md} | {its} | "
+                  f"{passes} | {r['reps']} | {r['cpu']:.1f} ({r['cpu_max']:.1f}) | {r['wall']:.1f} "
+                  f"({r['wall_max']:.1f}) | {r['rss']:.0f} | {r['load']:.1f} "
+                  f"| {cmp} |", flush=True)
+
+
+def lam2(ns, dense_max=24, X=0.3, Y=0.15):
+    """Melan's lam2 of a fretting load (similar materials, nu = 0.3, window 2.4 a): matrix-free
+    per-node construction against the dense cone engine on the contact-cell system (CPU times)."""
+    from shakedown.models.half_space.bounds import contact_system_dense, fretting_lam2
+
+    f = 0.5
+    a = float(cont.hertz_radius(P, R, E_STAR))
+    print(f"Q = lam ({X} f P cos, {Y} f P sin), P = {P}, f = {f}")
+    print("| n | cells | contact cells | lam2 matrix-free | CG its | CPU [s] | lam2 dense cone engine "
+          "[lower, upper] | CPU [s] (build + bounds) | rel. difference |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for n in ns:
+        m = sd.half_space_model(radius=R, n_cells=n, width=2.4 * a, friction=f, materials=MATS)
         c0 = time.process_time()
-        out = fretting_cycles_fft(m, P, X * f * P * np.cos(2 * np.pi * t), max_cycles=4, tol=1e-9)
-        c_fft = time.process_time() - c0
-        W_md = float(cont.mindlin_deresiewicz_dissipation(X * f * P, P, f, a,
-                                                          cont.tangential_compliance_constant(mats)))
-        dense = "- | -"
+        mf = fretting_lam2(m, P, X * f * P, Y * f * P)
+        c_mf = time.process_time() - c0
+        dense = "- | - | -"
         if n <= dense_max:
             c0 = time.process_time()
-            run, _ = hs.fretting_run(m, P, X * f * P, steps_per_cycle=S, max_cycles=4)
-            c_dense = time.process_time() - c0
-            dense = f"{c_dense:.1f} | {out['W'][-1] / run.steady_dissipation - 1:+.1e}"
-        rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-        it = np.array(out["iterations"])
-        print(f"| {n} | {n * n} | {2 * a / m.h:.1f} | {out['W'][-1] / W_md - 1:+.2e} | {len(out['W'])} "
-              f"| {int(np.median(it))}, {it.max()} | {c_fft:.1f} | {dense} | {rss:.0f} |", flush=True)
+            system, welded, _ = contact_system_dense(m, mf.contact)
+            q0, p0 = welded(0.0, 0.0, P)
+            ux, uy = welded(1.0, 0.0, P)[0] - q0, welded(0.0, 1.0, P)[0] - q0
+            load = sd.LoadCycle.from_harmonics(q0, p0, q_cos=X * f * P * ux, q_sin=Y * f * P * uy)
+            b = sd.shakedown_bounds(system, load, only=["lam2"])
+            c_d = time.process_time() - c0
+            dense = (f"{b.lam2:.8g} [{b.lam2_lower:.8g}, {b.lam2_upper:.8g}] | {c_d:.1f} | "
+                     f"{mf.lam2 / b.lam2 - 1:+.1e}")
+        print(f"| {n} | {n * n} | {int(mf.contact.sum())} | {mf.lam2:.8g} | {mf.cg_iterations} | "
+              f"{c_mf:.2f} | {dense} |", flush=True)
 
 
 if __name__ == "__main__":
     ap = argparse.ArgumentParser()
-    ap.add_argument("what", choices=["hertz", "operator", "matrix_free"])
+    ap.add_argument("what", choices=["hertz", "operator", "matrix_free", "one", "lam2"])
     ap.add_argument("--ns", type=int, nargs="*", default=None)
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--case", choices=sorted(CASES), default="similar")
+    ap.add_argument("--dense-max", type=int, default=24)
+    ap.add_argument("--reps", type=int, default=3)
+    ap.add_argument("--n", type=int)
+    ap.add_argument("--engine", choices=["fft", "dense"])
+    ap.add_argument("--S", type=int, default=40)
+    ap.add_argument("--out")
+    ap.add_argument("--cycles", type=int, default=None)
     a = ap.parse_args()
+    if a.what == "one":
+        run_one(a.case, a.n, a.engine, a.S, a.out, a.cycles)
+        raise SystemExit
     print(f"# OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS')}; "
           f"load: {os.getloadavg()}")
     if a.what == "hertz":
         hertz([15, 31] if a.quick else [15, 31, 63, 127, 255])
     elif a.what == "operator":
         operator(a.ns or ([8, 16] if a.quick else [8, 16, 24, 32, 48, 64, 128, 256]))
+    elif a.what == "lam2":
+        lam2(a.ns or [16, 24, 32, 48, 64, 128], dense_max=a.dense_max)
     else:
-        matrix_free(a.ns or [16, 32, 64])
+        matrix_free(a.ns or [16, 24, 32, 48, 64, 128], case=a.case, S=a.S, dense_max=a.dense_max,
+                    reps=a.reps, cycles=a.cycles)

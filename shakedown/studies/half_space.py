@@ -14,10 +14,13 @@
   :mod:`shakedown.models.half_space.model`) with ``s`` the rigid shift of body 1's distant points
   against body 2's; body 1 carries ``-Q`` there, so ``delta = -s = (F r)_m``.
 * :func:`fretting_run` runs the cycle of a constant ``P`` and a tangential ``Q(t)`` and returns
-  the loop ``(Q_x(t), Q_y(t), delta(t))`` beside the run.
+  the loop ``(Q_x(t), Q_y(t), delta(t))`` beside the run; :func:`fretting_run_fft` does the same
+  with the matrix-free steps of :mod:`shakedown.models.half_space.matrix_free` (any grid size).
 """
 
 from __future__ import annotations
+
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -136,3 +139,46 @@ def fretting_run(model, P0, Qx, Qy=0.0, *, steps_per_cycle: int = 40, max_cycles
     W_loop = float(np.sum(Qm * dd))
     return run, dict(t=t, Q=Q, delta=delta, q_full=qf, p_full=pf, states=st,
                      W=run.steady_dissipation, W_loop=W_loop)
+
+
+def _loop_dict(model, t, Q, qf, pf, states, W):
+    delta = tangential_displacement(model, qf, pf)
+    # W = closed integral of Q . d(delta) (the work of the tangential load on the relative
+    # displacement of the distant points); trapezoidal over the orbit's instants
+    W_loop = float(np.sum(0.5 * (Q[1:] + Q[:-1]) * np.diff(delta, axis=0)))
+    return dict(t=t, Q=Q, delta=delta, q_full=qf, p_full=pf, states=states, W=W, W_loop=W_loop)
+
+
+def fretting_run_fft(model, P0, Qx, Qy=0.0, *, steps_per_cycle: int = 40, max_cycles: int = 10,
+                     tol: float = 1e-9):
+    """:func:`fretting_run` with the matrix-free steps (FFT products only; any grid size).
+
+    The run starts from Mindlin's first loading (``P0``, then ``Q = (Qx, 0)``, by
+    :func:`~shakedown.models.half_space.matrix_free.path_fft`).  Returns ``(run, loop)``: ``run`` a
+    namespace with ``dissipation`` (per cycle), ``steady_dissipation``, ``cycles_to_steady``,
+    ``period`` (1), ``status``, ``stuck_cells`` (cells in contact sticking throughout the last
+    cycle, the reference cell included), ``residual``, ``iterations``; ``loop`` as in
+    :func:`fretting_run`, with ``states`` ``"slip"`` where ``|q_i| = f p_i`` (to ``1e-6``),
+    ``"separation"`` where ``p_i = 0``, else ``"stick"``.
+    """
+    from ..models.half_space.matrix_free import fretting_cycles_fft, path_fft
+
+    S = int(steps_per_cycle)
+    t = (np.arange(S) + 1) / S
+    q0, p0 = path_fft(model, [(0.0, 0.0, P0), (Qx, 0.0, P0)])[-1]
+    Q = np.stack([Qx * np.cos(2 * np.pi * t), Qy * np.sin(2 * np.pi * t)], axis=-1)
+    out = fretting_cycles_fft(model, P0, Q[:, 0], Q[:, 1], max_cycles=max_cycles, tol=tol,
+                              q0=q0, p0=p0)
+    # the orbit closed: the instant t = 0 is the last one (t = 1)
+    t, Q = np.r_[0.0, t], np.concatenate([Q[-1:], Q])
+    qf = np.concatenate([out["q"][-1:], out["q"]])
+    pf = np.concatenate([out["p"][-1:], out["p"]])
+    rim = np.hypot(qf[..., 0], qf[..., 1]) >= model.friction * pf * (1 - 1e-6)
+    states = np.where(pf <= 0, "separation", np.where(rim, "slip", "stick")).astype(object)
+    W = out["W"]
+    periodic = out["status"] == "periodic"
+    run = SimpleNamespace(dissipation=W, steady_dissipation=float(W[-1]),
+                          cycles_to_steady=len(W) - 1 if periodic else -1, period=1,
+                          status=out["status"], stuck_cells=out["stuck"], residual=out["residual"],
+                          iterations=out["iterations"])
+    return run, _loop_dict(model, t, Q, qf, pf, states, run.steady_dissipation)

@@ -121,3 +121,37 @@ def test_sphere_fretting_scene_runs_from_the_cli(tmp_path):
     for name in ("contact_maps.png", "stuck_zone.png", "hysteresis.png", "steady_cycle.csv",
                  "dissipation_amplitude.png", "dissipation_amplitude.csv"):
         assert (out / name).stat().st_size > 0
+
+
+def test_fretting_analysis_matrix_free_engine_matches_the_dense_one(tmp_path):
+    import json
+
+    from shakedown.scenes.cli import main
+
+    out = {}
+    for engine in ("dense", "fft"):
+        rc = main(["run", "sphere_fretting", "-q", "-o", str(tmp_path / engine), "--set",
+                   "model.n_cells=9", "--set", "fretting.steps_per_cycle=16", "--set",
+                   f"fretting.engine={engine}", "--set", "fretting.plots=false"])
+        assert rc == 0
+        out[engine] = json.loads((tmp_path / engine / "fretting.json").read_text())
+    d, f = out["dense"], out["fft"]
+    assert f["engine"] == "fft" and d["engine"] == "dense"
+    for key in ("steady_dissipation", "W_loop"):
+        assert f[key] == pytest.approx(d[key], rel=1e-6)
+    assert (f["n_stuck_cells"], f["status"], f["cycles_to_steady"]) == \
+        (d["n_stuck_cells"], d["status"], d["cycles_to_steady"])
+
+
+def test_a_scene_above_the_dense_limit_builds_without_the_dense_system():
+    from shakedown.models.half_space import DENSE_MAX_CELLS
+    from shakedown.scenes.builders.half_space import build
+
+    n = int(np.sqrt(DENSE_MAX_CELLS)) + 1
+    system, load, m = build({"profile": "sphere", "radius": 1.0, "n_cells": n, "E1": 1.0, "nu1": 0.0,
+                             "E2": 1.0, "nu2": 0.0}, {"P0": 1e-3, "Qx": 2e-4}, None)
+    assert m.n_cells > DENSE_MAX_CELLS and "stiffness" not in m.__dict__
+    with pytest.raises(sd.SceneError, match="DENSE_MAX_CELLS.*fretting"):
+        _ = system.A
+    with pytest.raises(sd.SceneError, match="no dense load"):
+        _ = load.q0

@@ -4,8 +4,10 @@ Imports :mod:`shakedown.model` (and the material checks of the half-plane model)
 :mod:`.influence`: closed-form cell influence coefficients; :mod:`.operators`: the compliance as
 an FFT convolution; :mod:`.model`: :func:`half_space_model`; :mod:`.continuum`: Hertz,
 Cattaneo-Mindlin and Mindlin-Deresiewicz; :mod:`.normal`: a frictionless normal solver
-(Polonsky-Keer); :mod:`.matrix_free`: the fretting cycle of similar materials at constant ``P``
-with FFT products only (large grids).
+(Polonsky-Keer); :mod:`.tangential`: the tangential step by FISTA with FFT products;
+:mod:`.matrix_free`: matrix-free steps and cycles (similar or dissimilar materials, constant or
+varying ``P``; large grids); :mod:`.bounds`: Melan's ``lam2`` of a fretting load on similar
+materials per node, matrix-free.
 """
 
 from .model import DENSE_MAX_CELLS, HalfSpaceModel, gap_function, half_space_model

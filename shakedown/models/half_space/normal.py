@@ -61,16 +61,20 @@ def _zz_operator(model):
     return apply
 
 
-def check_normal_contact(model, p, approach, P):
+def check_normal_contact(model, p, approach, P, extra_gap=None):
     """Dimensionless residual of the frictionless contact conditions for ``(p, d)``.
+
+    ``extra_gap`` (n^2,) [length] is added to the initial gap (the gap the shear forces open
+    for dissimilar materials, ``F_zt q``).
 
     ``max`` of: ``-min p / P``, the load error ``|sum p - P| / P``, the largest interpenetration
     and the largest gap where ``p > 0`` (both over the approach ``|d|`` plus the gap's spread),
     and the complementarity ``sum p |gap| / (P scale)``.
     """
     p = np.asarray(p, float)
-    gap = model.gap + _zz_operator(model)(p) - approach
-    g_scale = abs(approach) + np.ptp(model.gap) + np.finfo(float).tiny
+    g0 = model.gap if extra_gap is None else model.gap + extra_gap
+    gap = g0 + _zz_operator(model)(p) - approach
+    g_scale = abs(approach) + np.ptp(g0) + np.finfo(float).tiny
     on = p > 0
     return float(max(-min(p.min(), 0.0) / P, abs(p.sum() - P) / P,
                      -min(gap.min(), 0.0) / g_scale,
@@ -78,7 +82,8 @@ def check_normal_contact(model, p, approach, P):
                      float(np.sum(p * np.abs(gap))) / (P * g_scale)))
 
 
-def normal_contact(model, P, rtol: float = 1e-10, maxiter: int = 5000) -> NormalContact:
+def normal_contact(model, P, rtol: float = 1e-10, maxiter: int = 5000, *, extra_gap=None,
+                   p_init=None, apply=None) -> NormalContact:
     """Frictionless normal contact of a :class:`.model.HalfSpaceModel` under normal force ``P``.
 
     Parameters
@@ -89,6 +94,13 @@ def normal_contact(model, P, rtol: float = 1e-10, maxiter: int = 5000) -> Normal
     rtol : float
         Stop when the relative change of ``p`` in an iteration is below ``rtol``.
     maxiter : int
+    extra_gap : ndarray, shape (n^2,), optional
+        Added to the initial gap [length] (``F_zt q`` of dissimilar materials).
+    p_init : ndarray, shape (n^2,), optional
+        Starting cell forces (a warm start, e.g. the previous step's), rescaled to ``P``; cells
+        with ``p_init = 0`` start open.  Default: uniform.
+    apply : callable, optional
+        ``F_zz`` products (n^2,) -> (n^2,) (default: built from the model's kernels).
 
     Returns
     -------
@@ -97,10 +109,12 @@ def normal_contact(model, P, rtol: float = 1e-10, maxiter: int = 5000) -> Normal
     P = float(P)
     if not np.isfinite(P) or P <= 0:
         raise InputError(f"P must be a finite normal force > 0, got {P!r}")
-    apply = _zz_operator(model)
-    g0 = model.gap
+    apply = _zz_operator(model) if apply is None else apply
+    g0 = model.gap if extra_gap is None else model.gap + np.asarray(extra_gap, float)
     N = g0.size
     p = np.full(N, P / N)
+    if p_init is not None and np.sum(p_init) > 0:
+        p = np.maximum(np.asarray(p_init, float), 0.0) * (P / float(np.sum(np.maximum(p_init, 0.0))))
     t = np.zeros(N)
     G_old = 1.0
     delta = 0.0
@@ -134,4 +148,4 @@ def normal_contact(model, P, rtol: float = 1e-10, maxiter: int = 5000) -> Normal
     on = p > 0
     d = float(np.mean(gap[on]))
     return NormalContact(p=p, gap=gap - d, approach=d, iterations=it,
-                         residual=check_normal_contact(model, p, d, P))
+                         residual=check_normal_contact(model, p, d, P, extra_gap))

@@ -1,8 +1,10 @@
 """The ``fretting`` analysis of a ``half_space`` scene: the steady cycle of a sphere on a flat.
 
 ``[analyses.fretting]`` takes the scene's load (constant ``P0``; ``P1`` must be 0), reaches the
-steady cycle with :func:`shakedown.studies.half_space.fretting_run` from Mindlin's first loading
-(``P0``, then ``Q_x`` up to its amplitude) and writes
+steady cycle with :func:`shakedown.studies.half_space.fretting_run` (dense) or
+:func:`~shakedown.studies.half_space.fretting_run_fft` (matrix-free: ``engine = "fft"``, and
+``"auto"`` above :data:`~shakedown.models.half_space.DENSE_MAX_CELLS` cells) from Mindlin's first
+loading (``P0``, then ``Q_x`` up to its amplitude) and writes
 
 * ``fretting.json`` -- ``W`` per cycle, the steady ``W``, periods to steady, the continuum
   references (Hertz ``a``, Mindlin-Deresiewicz ``W`` and stick radius where they apply: an
@@ -31,6 +33,8 @@ OPTIONS = {
     "plots": (bool, True, "write PNG plots"),
     "amplitudes": (list, [], "multiples of the tangential amplitude (Qx, Qy) at which to run the "
                              "steady cycle too: W against amplitude on log-log axes"),
+    "engine": (str, "auto", "'dense' (cone engine on the condensed stiffness), 'fft' (matrix-free "
+               "FFT steps) or 'auto' (fft above DENSE_MAX_CELLS cells)"),
 }
 
 
@@ -51,8 +55,21 @@ def run(ctx, options: dict) -> dict:
     if options["steps_per_cycle"] < 4 or options["max_cycles"] < 1:
         raise SceneError("[analyses.fretting] steps_per_cycle must be >= 4 and max_cycles >= 1")
     P0, Qx, Qy = _load_amplitudes(ctx)
-    run_, loop = hs.fretting_run(model, P0, Qx, Qy, steps_per_cycle=options["steps_per_cycle"],
-                                 max_cycles=options["max_cycles"], tol=options["tol"])
+    from ...models.half_space import DENSE_MAX_CELLS
+
+    engine = options["engine"]
+    if engine not in ("auto", "dense", "fft"):
+        raise SceneError(f"[analyses.fretting] engine must be 'auto', 'dense' or 'fft', got {engine!r}")
+    if engine == "auto":
+        engine = "fft" if model.n_cells > DENSE_MAX_CELLS else "dense"
+    kw = dict(steps_per_cycle=options["steps_per_cycle"], max_cycles=options["max_cycles"],
+              tol=options["tol"])
+    fretting_run = hs.fretting_run_fft if engine == "fft" else hs.fretting_run
+    run_, loop = fretting_run(model, P0, Qx, Qy, **kw)
+    if engine == "fft":
+        stuck_cells = np.asarray(run_.stuck_cells, int)
+    else:
+        stuck_cells = np.r_[model.keep[np.asarray(run_.stuck_nodes, int)], model.reference]
     qm = loop["q_full"][:, model.reference]
     pm = loop["p_full"][:, model.reference]
     ref_margin = float(np.max((np.linalg.norm(qm, axis=-1) - model.friction * pm) / P0))
@@ -61,7 +78,7 @@ def run(ctx, options: dict) -> dict:
         "steady_dissipation": float(run_.steady_dissipation),
         "dissipation_per_cycle": [float(w) for w in run_.dissipation],
         "cycles_to_steady": int(run_.cycles_to_steady), "period": int(run_.period),
-        "status": str(run_.status), "n_stuck_cells": int(len(run_.stuck_nodes)) + 1,
+        "status": str(run_.status), "n_stuck_cells": int(len(stuck_cells)), "engine": engine,
         "reference_cell_margin": ref_margin, "reference_cell_ok": bool(ref_margin <= 1e-9),
         "W_loop": float(loop["W_loop"]),
     }
@@ -88,14 +105,12 @@ def run(ctx, options: dict) -> dict:
         "p": loop["p_full"].ravel(), "state": np.asarray(loop["states"]).ravel()}))
     amps = _amplitudes(options)
     if amps.size:
-        Ws = np.array([hs.fretting_run(model, P0, x * Qx, x * Qy,
-                                       steps_per_cycle=options["steps_per_cycle"],
-                                       max_cycles=options["max_cycles"],
-                                       tol=options["tol"])[0].dissipation[-1] for x in amps])
+        Ws = np.array([fretting_run(model, P0, x * Qx, x * Qy, **kw)[0].dissipation[-1]
+                       for x in amps])
         ctx.output.write_table("dissipation_amplitude.csv", pd.DataFrame(
             {"amplitude": amps, "Q_amplitude": amps * np.hypot(Qx, Qy), "W": Ws}))
     if options["plots"]:
-        _plots(ctx, model, run_, loop, a, c, f * P0)
+        _plots(ctx, model, stuck_cells, loop, a, c, f * P0)
         if amps.size:
             _amplitude_plot(ctx, model, amps, Ws, P0, Qx, Qy, a)
     return {k: summary[k] for k in ("verdict", "steady_dissipation", "cycles_to_steady", "status")}
@@ -163,7 +178,7 @@ def _amplitude_plot(ctx, model, amps, Ws, P0, Qx, Qy, a):
     ctx.output.save_figure("dissipation_amplitude.png", fig)
 
 
-def _plots(ctx, model, run_, loop, a, c, fP):
+def _plots(ctx, model, cells, loop, a, c, fP):
     import matplotlib.pyplot as plt
 
     from ...models.half_space import continuum as cont
@@ -185,7 +200,6 @@ def _plots(ctx, model, run_, loop, a, c, fP):
     fig.tight_layout()
     ctx.output.save_figure("contact_maps.png", fig)
     fig, ax = plt.subplots(figsize=(5, 5))
-    cells = np.r_[model.keep[np.asarray(run_.stuck_nodes, int)], model.reference]
     ph.plot_stuck_zone(model, cells, a=a, c_pred=c, zoom=zoom, ax=ax)
     ctx.output.save_figure("stuck_zone.png", fig)
     fig, axs = plt.subplots(1, 2, figsize=(11, 4.2))

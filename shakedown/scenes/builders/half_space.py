@@ -51,7 +51,7 @@ def build_from_scene(model_table: dict, load_table: dict, base_dir=None):
     from ...models.half_plane.model import _positive
     from ...models.half_space.continuum import hertz_radius
     from ...models.half_space.influence import material_constants
-    from ...models.half_space.model import half_space_model
+    from ...models.half_space.model import DENSE_MAX_CELLS, half_space_model
 
     model_table = {k: v for k, v in model_table.items() if k != "kind"}
     _check(model_table, MODEL_KEYS, "model")
@@ -78,6 +78,8 @@ def build_from_scene(model_table: dict, load_table: dict, base_dir=None):
                                              _positive("radius", kw["radius"]), e_star))
         m = half_space_model(profile, n_cells=model_table.get("n_cells", 15), width=width,
                              friction=model_table.get("friction", 0.5), materials=mats, **kw)
+        if m.n_cells > DENSE_MAX_CELLS:  # no dense system: the matrix-free fretting analysis only
+            return _TooLarge(m, "system"), _TooLarge(m, "load"), m
         load = m.load_cycle(P0=P0, P1=P1, Qx=load_table.get("Qx", 0.0), Qy=load_table.get("Qy", 0.0),
                             phase=phase)
     except SceneError:
@@ -85,6 +87,28 @@ def build_from_scene(model_table: dict, load_table: dict, base_dir=None):
     except InputError as e:
         raise SceneError(f"[model]/[load] of kind 'half_space': {e}") from None
     return m.system, load, m
+
+
+def _dense_max():
+    from ...models.half_space.model import DENSE_MAX_CELLS
+
+    return DENSE_MAX_CELLS
+
+
+class _TooLarge:
+    """Stands for the dense system (or its load) of a model above ``DENSE_MAX_CELLS`` cells: any
+    use raises a :class:`SceneError` that names the size and what runs at it."""
+
+    def __init__(self, model, what):
+        self._model, self._what = model, what
+
+    def __getattr__(self, name):
+        if name.startswith("__"):
+            raise AttributeError(name)
+        raise SceneError(
+            f"[model] n_cells = {self._model.n} gives {self._model.n_cells} cells, above "
+            f"DENSE_MAX_CELLS = {_dense_max()}: no dense {self._what} is built; only the "
+            "'fretting' analysis (matrix-free FFT steps) runs at this size (or lower n_cells)")
 
 
 #: The builder interface of ``shakedown.scenes`` (``build(model, load, scene_dir)``).
