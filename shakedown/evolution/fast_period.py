@@ -16,6 +16,8 @@ import numpy as np
 
 from . import kernel as _k
 from . import kernel_shortcut as _ks
+from . import kernel_warm as _kw
+from .kernel_warm import warm_up  # noqa: F401 - the study's entry point (workers.py)
 
 
 class KernelCache:
@@ -86,11 +88,11 @@ def run_period(solver, qw, pw, v0, guess, V, Wg, Q, P, st, act, scales, res, sta
     status = step_status(solver)
     c0 = kc.counters.copy()
     j = 0
-    K, f = _readonly(solver.K), _readonly(solver.f)
-    qw, pw = np.ascontiguousarray(qw), np.ascontiguousarray(pw)
+    K, f, diag = _readonly(solver.K), _readonly(solver.f), _readonly(solver.diag)
+    qw, pw = _kw.writable(qw), _kw.writable(pw)
     sc = kc.shortcut_state(qw, pw)
     while j < n_steps:
-        done = _k.march(K, f, solver.diag, qw, pw, j, q0, p0, s, solver.feas_tol,
+        done = _k.march(K, f, diag, qw, pw, j, q0, p0, s, solver.feas_tol,
                         solver.max_iter, kc.mult, kc.keys, kc.hashes, kc.offs, kc.sizes,
                         kc.pool, kc.ipool, kc.fpool, kc.meta, kc.counters, kc.seen, V, Wg, Q, P,
                         st, act, scales, res, wd, *sc)
@@ -118,11 +120,9 @@ def run_period(solver, qw, pw, v0, guess, V, Wg, Q, P, st, act, scales, res, sta
 
 
 def _readonly(a):
-    """A read-only view: the kernel is compiled for one array type (numba types a read-only
-    array apart from a writable one), so that it is compiled once, not once per flag."""
-    v = np.asarray(a, float).view()
-    v.setflags(write=False)
-    return v
+    """A read-only C-contiguous view (:func:`.kernel_warm.readonly`: the kernel is compiled
+    for one array type, not once per flag or layout)."""
+    return _kw.readonly(a)
 
 
 def _book(solver, kc, c0):
@@ -133,29 +133,3 @@ def _book(solver, kc, c0):
     t["cache_hits"] += int(d[_k.C_HITS])
     t["factorizations"] += int(d[_k.C_FACT])
     t["updates"] += int(d[_k.C_UPD])
-
-
-def warm_up() -> float:
-    """Compile the kernel (first use after installing: 10-25 s, written to numba's cache) or
-    load it from the cache (about 0.5 s), once per process; the seconds spent.
-
-    A study calls this before it starts worker processes, so that they load the cache
-    instead of compiling the kernel each at the same time.
-    """
-    import time
-
-    if not _k.HAVE_KERNEL:
-        return 0.0
-    t = time.perf_counter()
-    n = 1
-    K = np.array([[1.0, 0.0], [0.0, 1.0]])
-    kc = KernelCache(n, 1e5, 4)
-    qw = np.array([[-2.0], [2.0]])
-    pw = np.ones((2, 1))
-    V, Wg, Q, P = (np.zeros((3, n)) for _ in range(4))
-    st, act = np.zeros((3, n), np.int8), np.zeros((2, n), np.int8)
-    _k.march(_readonly(K), _readonly([0.5]), np.ones(2), qw, pw, 0, qw[0].copy(), pw[0].copy(),
-             np.zeros(n, np.int8), 1e-9, 4, kc.mult, kc.keys, kc.hashes, kc.offs, kc.sizes,
-             kc.pool, kc.ipool, kc.fpool, kc.meta, kc.counters, kc.seen, V, Wg, Q, P, st, act,
-             np.zeros(2), np.zeros(2), np.zeros(1), *_ks.state(n, qw, pw))
-    return time.perf_counter() - t
