@@ -101,10 +101,14 @@ def main():
             pid = re.search(r"\(pid (\d+)\)", cold["stderr"])
             last = k == args.repeats - 1
             if pid and not last:  # the background compile this run started: stopped (only
-                os.kill(int(pid.group(1)), signal.SIGTERM)  # the last one is waited for)
-                while os.path.exists(f"/proc/{pid.group(1)}"):
-                    time.sleep(0.2)
-                os.remove(lock_path())
+                try:  # the last one is waited for; it may have finished during the run)
+                    os.kill(int(pid.group(1)), signal.SIGTERM)
+                    while os.path.exists(f"/proc/{pid.group(1)}"):
+                        time.sleep(0.2)
+                except ProcessLookupError:
+                    pass
+                if os.path.exists(lock_path()):
+                    os.remove(lock_path())
             print(f"{time.strftime('%H:%M:%S')} cold: {cold['wall']:.1f} s wall, "
                   f"{cold['cpu']:.1f} s CPU (load {cold['load']:.1f}; the note printed: "
                   f"{pid is not None})", flush=True)
@@ -132,7 +136,9 @@ def main():
 
 
 def _results(r) -> str:
-    return r["stdout"].split("results written")[0].replace("wall_s", "")
+    """The printed results without the run's own seconds (``wall_s``)."""
+    text = r["stdout"].split("results written")[0]
+    return "\n".join(line for line in text.splitlines() if "wall_s" not in line)
 
 
 if __name__ == "__main__":

@@ -2,7 +2,7 @@
 line's first run) compiled in the background while the steps run in Python (issue 25).
 
 Compiling the kernel (:mod:`.kernel`: the period loop ``march`` and everything it calls) costs
-about 40 s of CPU once after installing (``benchmarks/RESULTS_first_run.md``); numba then keeps
+about 70 s of CPU once after installing (``benchmarks/RESULTS_first_run.md``); numba then keeps
 it on disk (``cache=True``: beside the package in ``shakedown/evolution/__pycache__``, or in
 ``NUMBA_CACHE_DIR``) and later processes load it in about 0.5 s.  The policy for a process whose
 cache is cold is read from the environment variable ``SHAKEDOWN_KERNEL`` each time it is asked:
@@ -196,11 +196,11 @@ def background_note() -> str | None:
     return ("note: numba's cache did not hold the compiled kernel (first run after installing):"
             " this run's steps ran in Python (the same steps and checks; answers equal to "
             "round-off; solvers made after the kernel was cached use it); a background process "
-            f"(pid {proc.pid}) is compiling the kernel, about 40 s of CPU, for later runs")
+            f"(pid {proc.pid}) is compiling the kernel (about a minute of CPU) for later runs")
 
 
 def warm_up() -> float:
-    """Compile the kernel (first use after installing, about 40 s of CPU, written to numba's
+    """Compile the kernel (first use after installing, about a minute of CPU, written to numba's
     cache) or load it from the cache (about 0.5 s), once per process; the seconds spent.
     Under the ``background`` policy a cold cache is not compiled here
     (:func:`kernel_enabled`).
