@@ -1,7 +1,7 @@
 """One load period of one state by the compiled kernel (:mod:`.kernel`), with the Python step
 (:meth:`StepSolver.solve`) for the steps the kernel hands back (issue 13/14; MODEL.md s.4).
 
-:class:`KernelCache` is the kernel's bounded cache of assignment inverses, kept with the
+:class:`~.kernel_warm.KernelCache` is the kernel's bounded cache of assignment inverses, kept with the
 :class:`~.complementarity.StepSolver` (``solver.kernel_cache``) so that the runs of one task
 share it.  An inverse reached by rank-one updates differs from a fresh one in the last bits, so
 a run's numbers can depend, at round-off level, on which runs the same solver did before (as
@@ -15,49 +15,8 @@ from __future__ import annotations
 import numpy as np
 
 from . import kernel as _k
-from . import kernel_shortcut as _ks
 from . import kernel_warm as _kw
-from .kernel_warm import warm_up  # noqa: F401 - the study's entry point (workers.py)
-
-
-class KernelCache:
-    """Storage of the kernel's inverse cache for one system (``cache_bytes`` bounds the pool
-    of inverses; when full the cache is cleared and refilled)."""
-
-    def __init__(self, n: int, cache_bytes: float, max_iter: int):
-        self.n = n
-        # room for 128 of the largest inverses ((2N)^2 numbers each; typical ones are 16x
-        # smaller) within the budget, and always for one: a small system does not reserve
-        # the whole budget
-        n_doubles = max(min(int(cache_bytes // 8), 128 * (2 * n) ** 2), (2 * n) ** 2)
-        self.pool = np.empty(n_doubles)  # pages are touched only as inverses are stored
-        slots = int(min(4096, max(64, n_doubles // max(n, 1))))
-        self.keys = np.zeros((slots, n), np.int8)
-        self.hashes = np.zeros(slots, np.uint64)
-        self.offs = np.zeros((slots, 3), np.int64)  # pool offset, index offset, updates
-        self.sizes = np.zeros(slots, np.int64)
-        self.ipool = np.zeros(slots * 2 * n if slots * 2 * n <= 8_000_000 else 8_000_000,
-                              np.int64)
-        self.fpool = np.zeros(self.ipool.size)
-        self.meta = np.zeros(8, np.int64)
-        self.meta[3] = -1  # no last solved assignment
-        self.counters = np.zeros(8, np.int64)
-        self.seen = np.zeros((max_iter + 1, n), np.int8)
-        rng = np.random.default_rng(20261123)
-        self.mult = rng.integers(1, 2**63 - 1, size=n, dtype=np.int64).astype(np.uint64) | 1
-        self._shortcut = None
-
-    def shortcut_state(self, qw: np.ndarray, pw: np.ndarray):
-        """:func:`.kernel_shortcut.state` of a period's welded reactions, kept for the next
-        periods with the same ``qw, pw`` (its basis costs ~0.3 ms at N = 100, a fifth of a
-        period there)."""
-        c = self._shortcut
-        if (c is not None and c[0].shape == qw.shape and np.array_equal(c[0], qw)
-                and np.array_equal(c[1], pw)):
-            return c[2]
-        st = _ks.state(self.n, qw, pw)
-        self._shortcut = (qw.copy(), pw.copy(), st)
-        return st
+from .kernel_warm import KernelCache, warm_up  # noqa: F401 - (complementarity, workers.py)
 
 
 def usable(solver) -> bool:

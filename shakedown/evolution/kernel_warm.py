@@ -20,9 +20,11 @@ cache is cold is read from the environment variable ``SHAKEDOWN_KERNEL`` each ti
 
 The decision is taken when a :class:`~.complementarity.StepSolver` is made
 (:func:`kernel_enabled`), so one solver, hence one run or one study task, never mixes the two
-paths.  The cache is checked by asking numba's own cache for the exact argument types of the
-kernel's calls (:func:`kernel_args`; every call site passes the same types, so that one
-signature is compiled, not one per array flag or layout).
+paths; the tasks of a study that straddles the end of the background compile can (their rows then
+agree to round-off, not bit for bit, with those of a run on a warm cache).  The cache is
+checked by asking numba's own cache for the exact argument types of the kernel's calls
+(:func:`kernel_args`; every call site passes the same types, so that one signature is compiled,
+not one per array flag or layout).
 """
 
 from __future__ import annotations
@@ -46,6 +48,46 @@ RECHECK_SECONDS = 2.0
 LOCK_STALE_SECONDS = 900.0
 
 _state = {"ready": False, "checked": -np.inf, "started": None}
+
+
+class KernelCache:
+    """Storage of the kernel's inverse cache for one system (``cache_bytes`` bounds the pool
+    of inverses; when full the cache is cleared and refilled)."""
+
+    def __init__(self, n: int, cache_bytes: float, max_iter: int):
+        self.n = n
+        # room for 128 of the largest inverses ((2N)^2 numbers each; typical ones are 16x
+        # smaller) within the budget, and always for one: a small system does not reserve
+        # the whole budget
+        n_doubles = max(min(int(cache_bytes // 8), 128 * (2 * n) ** 2), (2 * n) ** 2)
+        self.pool = np.empty(n_doubles)  # pages are touched only as inverses are stored
+        slots = int(min(4096, max(64, n_doubles // max(n, 1))))
+        self.keys = np.zeros((slots, n), np.int8)
+        self.hashes = np.zeros(slots, np.uint64)
+        self.offs = np.zeros((slots, 3), np.int64)  # pool offset, index offset, updates
+        self.sizes = np.zeros(slots, np.int64)
+        self.ipool = np.zeros(slots * 2 * n if slots * 2 * n <= 8_000_000 else 8_000_000,
+                              np.int64)
+        self.fpool = np.zeros(self.ipool.size)
+        self.meta = np.zeros(8, np.int64)
+        self.meta[3] = -1  # no last solved assignment
+        self.counters = np.zeros(8, np.int64)
+        self.seen = np.zeros((max_iter + 1, n), np.int8)
+        rng = np.random.default_rng(20261123)
+        self.mult = rng.integers(1, 2**63 - 1, size=n, dtype=np.int64).astype(np.uint64) | 1
+        self._shortcut = None
+
+    def shortcut_state(self, qw: np.ndarray, pw: np.ndarray):
+        """:func:`.kernel_shortcut.state` of a period's welded reactions, kept for the next
+        periods with the same ``qw, pw`` (its basis costs ~0.3 ms at N = 100, a fifth of a
+        period there)."""
+        c = self._shortcut
+        if (c is not None and c[0].shape == qw.shape and np.array_equal(c[0], qw)
+                and np.array_equal(c[1], pw)):
+            return c[2]
+        st = _ks.state(self.n, qw, pw)
+        self._shortcut = (qw.copy(), pw.copy(), st)
+        return st
 
 
 def policy() -> str:
@@ -74,8 +116,6 @@ def kernel_args(n: int = 1):
     """Arguments of one period of an ``n``-node system by :func:`.kernel.march` (a load that
     makes the node slip both ways), and of a direct :func:`.kernel._solve_set` call: ``(march
     args, solve_set args)``, with the types of every real call."""
-    from .fast_period import KernelCache
-
     K = np.eye(2 * n)
     kc = KernelCache(n, 1e5, 4)
     qw = np.tile(np.array([[-2.0], [2.0]]), (1, n))
