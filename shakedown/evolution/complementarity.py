@@ -52,6 +52,7 @@ from ..model.validation import check_node_vector, require_two_dimensional
 from .active_set import ActiveSet
 from .factors import FactorCache
 from .fallbacks import Fallbacks
+from .kernel_warm import kernel_enabled
 from .step_types import (
     ALL_ALLOWED,
     BACKWARD,
@@ -111,7 +112,8 @@ class StepSolver(FactorCache, ActiveSet, Fallbacks):
         assignment systems as sparse matrices (SuperLU, cached per assignment like the dense
         LU factors) and compute reactions by sparse products; ``K`` is never densified (only
         the Lemke fallback, for steps the active set cannot finish, works on a dense
-        ``K^-1``).
+        ``K^-1``).  Also off when ``SHAKEDOWN_KERNEL=background`` and numba's cache does not
+        hold the compiled kernel yet (:mod:`.kernel_warm`: decided when the solver is made).
     """
 
     def __init__(self, system: DiscreteSystem, *, feas_tol: float = FEAS_TOL,
@@ -150,7 +152,9 @@ class StepSolver(FactorCache, ActiveSet, Fallbacks):
         self.update_min_size = int(update_min_size)
         self.enumerate_max_nodes = int(enumerate_max_nodes)
         self.check_uniqueness = bool(check_uniqueness)
-        self.kernel = bool(kernel) and not self.sparse  # the kernel is dense
+        # the kernel is dense; decided here, so that one solver never mixes the two paths
+        # (a cold numba cache under SHAKEDOWN_KERNEL=background: Python, see kernel_warm)
+        self.kernel = bool(kernel) and not self.sparse and kernel_enabled()
         self._cache: OrderedDict[bytes, _Factor] = OrderedDict()
         self._cache_used = 0
         self._base: _Factor | None = None

@@ -261,7 +261,8 @@ class FactorCache:
         """``z`` of assignment ``s`` by the compiled kernel's inverse cache (cache hit, block
         update or fresh inverse, see :mod:`.kernel`); its reactions are kept for
         :meth:`_reactions`.  ``None`` when the matrix is singular or the answer inaccurate."""
-        from .fast_period import _readonly
+        from .kernel_warm import readonly as _readonly
+        from .kernel_warm import writable
 
         n = self.n
         kc = self.kernel_cache
@@ -269,7 +270,7 @@ class FactorCache:
         c0 = kc.counters.copy()
         ok = _kernel._solve_set(
             np.array(s, np.int8), _readonly(self.K), _readonly(self.f),
-            np.ascontiguousarray(q0, float), np.ascontiguousarray(p0, float), n,
+            writable(q0), writable(p0), n,
             self.feas_tol * scale, kc.mult, kc.keys, kc.hashes, kc.offs, kc.sizes, kc.pool,
             kc.ipool, kc.fpool, kc.meta, kc.counters, z, q, p)
         d = kc.counters - c0

@@ -109,6 +109,25 @@ def _apply_overrides(scene, names, overrides):
 
 def main(argv=None) -> int:
     args = _parser().parse_args(argv)
+    # a cold numba cache (first run after installing): steps in Python now, the kernel
+    # compiled in the background for the next runs (evolution/kernel_warm.py); the variable
+    # reaches this command's worker processes and is restored afterwards
+    from ..evolution import kernel_warm
+
+    policy = os.environ.get(kernel_warm.POLICY_VAR)
+    if policy is None:
+        os.environ[kernel_warm.POLICY_VAR] = "background"
+    try:
+        return _run_main(args, argv)
+    finally:
+        if policy is None:
+            os.environ.pop(kernel_warm.POLICY_VAR, None)
+        note = kernel_warm.background_note()
+        if note and not getattr(args, "quiet", False):
+            print(f"shakedown: {note}", file=sys.stderr)
+
+
+def _run_main(args, argv) -> int:
     try:
         return _main(args, sys.argv[1:] if argv is None else argv)
     except OutputError as exc:  # the disk refused a result file: nothing half-written
