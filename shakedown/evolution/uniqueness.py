@@ -106,13 +106,19 @@ class UniquenessStudy:
             f"{'unique' if self.unique_dissipation else 'NOT unique'} dissipation",
             f"time-varying part: slip spread {self.slip_spread:.3g}, reaction spread "
             f"{self.reaction_spread:.3g} (relative {self.time_varying_spread:.3g})",
-            f"periods seen: {sorted(set(int(p) for p in t['period']))}; stuck sets seen: "
-            + ", ".join("{" + s + "}" for s in stuck[:8]) + (" ..." if len(stuck) > 8 else ""),
+            f"periods seen: {sorted(set(int(p) for p in t['period']))}; stuck sets seen "
+            "(nodes numbered from 1): "
+            + ", ".join("{" + _from_one(s) + "}" for s in stuck[:8]) + (" ..." if len(stuck) > 8 else ""),
         ]
         return "\n".join(lines)
 
     def __str__(self) -> str:
         return self.summary()
+
+
+def _from_one(stuck: str) -> str:
+    """A table's 0-based ``"0,3"`` as a person reads it, ``"1,4"``."""
+    return ",".join(str(int(j) + 1) for j in stuck.split(",")) if stuck else ""
 
 
 _WORKER = {}

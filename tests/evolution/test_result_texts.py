@@ -106,3 +106,15 @@ def test_growth_rates_and_cycle_stability_repr_and_verdict():
                                    "-0.2000 <= 0, first at t = 0.2500")
     ok = CycleStability(table=t.assign(unstable=False), results=(), min_margin=0.5)
     assert ok.verdict().startswith("Stable at all 3 snapshots")
+
+
+def test_uniqueness_summary_numbers_stuck_nodes_from_1():
+    """The table keeps 0-based indices (``stuck == "1"``: Python's node 1); the printed summary
+    says node 2, as every text a person reads (README: one numbering)."""
+    from shakedown import gallery
+
+    p = gallery.fig5_uncoupled_stuck()
+    study = sd.uniqueness_study(p.system, p.load, p.lam, 3, rng=1,
+                                steps_per_cycle=p.steps_per_cycle, max_cycles=200)
+    assert set(study.table["stuck"]) == {"1"}
+    assert "stuck sets seen (nodes numbered from 1): {2}" in study.summary()
