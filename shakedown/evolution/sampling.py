@@ -114,14 +114,18 @@ def _loss(load, S):
     return 1.0 - np.cos(np.pi / S) if load.kind == "harmonic" else 1.0
 
 
-def _exact_margins(system, load, lam, v):
+def _exact_margins(system, load, lam, v, minima=None):
     """Smallest stick margins over the period of the exact load at the fixed state ``(v, 0)``:
-    ``(margin_I, t_I, margin_II, t_II)``, each shape (N,) (closed form, MODEL.md s.2-3)."""
+    ``(margin_I, t_I, margin_II, t_II)``, each shape (N,) (closed form, MODEL.md s.2-3).
+
+    ``minima``, the load's ``(periodic_min(-1, f), periodic_min(1, f))``, which do not depend on
+    the state, may be passed to skip recomputing them."""
     f = system.friction
     q = load.q0 + system.A @ v
     p = load.p0 + system.B.T @ v
-    mI, tI = load.periodic_min(-1.0, f)    # I_j: f p - q >= 0
-    mII, tII = load.periodic_min(1.0, f)   # II_j: f p + q >= 0
+    if minima is None:
+        minima = (load.periodic_min(-1.0, f), load.periodic_min(1.0, f))
+    (mI, tI), (mII, tII) = minima   # I_j: f p - q >= 0; II_j: f p + q >= 0
     return f * p - q + lam * mI, tI, f * p + q + lam * mII, tII
 
 
@@ -143,8 +147,10 @@ def _settle_at_extremes(system, load, lam, n_samples, v, error, force_scale, tol
     rounds = 4 * n + 4 if max_rounds is None else max_rounds
     v0 = np.asarray(v, float)
     cur = v0.copy()
+    f = system.friction
+    minima = (load.periodic_min(-1.0, f), load.periodic_min(1.0, f))  # state-independent
     for k in range(rounds + 1):
-        mI, tI, mII, tII = _exact_margins(system, load, lam, cur)
+        mI, tI, mII, tII = _exact_margins(system, load, lam, cur, minima)
         margins = np.minimum(mI, mII)
         worst = int(np.argmin(margins))
         if margins[worst] >= -tol_force:
