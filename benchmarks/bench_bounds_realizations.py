@@ -145,7 +145,8 @@ def drive(args):
         for i in range(args.count):
             if (args.kind, n, i) in done:
                 continue
-            env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
+            env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1",
+                       NUMBA_NUM_THREADS="1")
             p = subprocess.run([sys.executable, __file__, "--one", args.kind, str(n), str(i)],
                                capture_output=True, text=True, env=env)
             lines = [ln for ln in p.stdout.splitlines() if ln.startswith("{")]
