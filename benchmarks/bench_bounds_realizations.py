@@ -79,41 +79,121 @@ def build(kind, n, i):
     raise ValueError(f"kind must be crack, dense or fe; got {kind!r}")
 
 
-def check_with_highs(b):
-    """Relative differences of lam2 and of the LP deciding lam1 to HiGHS (nondimensional)."""
-    from shakedown.bounds.constraints import Scales
+#: HiGHS's primal and dual feasibility tolerances in the check (its default is 1e-7).
+CHECK_TOL = 1e-9
+#: Rows drawn per realization for the spot checks of lam_high and lam_low.
+SPOT_ROWS = 3
+
+
+class _NoBook:
+    """What :func:`dense_path._min_start` records (nothing here)."""
+
+    def record(self, ans):
+        pass
+
+
+def _dense_lp(cs):
+    """The dense path's LP ``max e.x, A x <= b`` in ``x = (v, lam)`` (:mod:`.dense_path`)."""
+    n = cs.n_nodes
+    A = np.vstack([np.hstack([cs.G, -cs.m[:, None]]), np.r_[np.zeros(n), -1.0][None, :]])
+    return A, np.r_[cs.c, 0.0], np.r_[np.zeros(n), 1.0]
+
+
+def _highs(ch):
     from shakedown.bounds.highs_path import HighsModel
+
+    model = HighsModel(ch)
+    h = model.lp._h
+    for opt in ("primal_feasibility_tolerance", "dual_feasibility_tolerance"):
+        h.setOptionValue(opt, CHECK_TOL)
+    h.setOptionValue("time_limit", 900.0)
+    return model
+
+
+def _verify(model, T, sense, tight=()):
+    """HiGHS started from the basis ``T`` (dense rows): its value, iterations and seconds."""
+    accepted = T is not None and model.start_from(np.sort(T))
+    t = time.perf_counter()
+    ans = model.run(sense, tight=tight)
+    v = float(ans.x[-1]) if ans.status == "optimal" else np.nan
+    return v, int(ans.iterations), time.perf_counter() - t, bool(accepted), ans.status
+
+
+def check_with_highs(b, rng):
+    """Independent checks by HiGHS (nondimensional LPs, relative to ``max(1, lam2)``).
+
+    Each LP is handed to HiGHS (tolerances :data:`CHECK_TOL`) with the dense path's optimal
+    basis as its start; HiGHS computes that basis's primal and dual solution with its own
+    factorization, checks optimality in its own terms and pivots on if it is not optimal (the
+    iteration count says; 0 = the dense basis is HiGHS's optimum too).  Checked: the ``lam2`` LP
+    (basis rebuilt from the result's certificate and state), the LP deciding ``lam1`` (``max
+    lam`` with the limiting row tight; ``min lam`` when ``lam1 = 0``), and :data:`SPOT_ROWS`
+    random rows' ``lam_high`` (equal where exact, ``>=`` the proven bound elsewhere, ``>= lam1``)
+    and ``lam_low`` (equal).  The bases of the last three are found here by the dense dual
+    simplex from the ``lam2`` basis (``max``) or the ``lam = 0`` vertex (``min``)."""
+    from shakedown import dense_lp
+    from shakedown.bounds.constraints import Scales
+    from shakedown.bounds.dense_path import _min_start
 
     cs = b.constraints
     sc = Scales.of(cs)
     ch = sc.nondimensional(cs)
     n = ch.n_nodes
-    model = HighsModel(ch)
-    lam2 = b.lam2 / sc.load_factor
-    # the dense optimum's tight rows as HiGHS's start basis (HiGHS checks it in its own terms)
-    A = np.hstack([ch.G, -ch.m[:, None]])
+    A, bb, e = _dense_lp(ch)
+    lf = sc.load_factor
+    lam2 = b.lam2 / lf
+    scale = max(1.0, abs(lam2))
+    # the dense optimum's tight rows: the certificate's rows first, then the smallest slacks
     x = np.r_[b.state_at_lam2 / sc.slip, lam2]
-    slack = (ch.c - A @ x) / (np.linalg.norm(A, axis=1) * max(1.0, np.abs(x).max()))
+    slack = (bb - A @ x) / (np.linalg.norm(A, axis=1) * max(1.0, np.abs(x).max()))
     y = b.certificate
-    slack[y > 1e-12 * max(np.abs(y).max(initial=0.0), 1e-300)] = -1.0  # the certificate's rows
-    T = np.argsort(slack, kind="stable")[: n + 1 if lam2 > 0 else n]  # N + 1 rows in all
-    T = np.r_[T, 2 * n] if lam2 <= 0 else T  # lam = 0: the row -lam <= 0 is one of them
-    model.start_from(np.sort(T))
-    t = time.perf_counter()
-    ans = model.run("max")
-    out = {"highs_lam2_s": time.perf_counter() - t, "highs_lam2_iters": int(ans.iterations)}
-    out["dlam2"] = abs(float(ans.x[-1]) - lam2) / max(1.0, abs(lam2))
+    slack[: 2 * n][y > 1e-12 * max(np.abs(y).max(initial=0.0), 1e-300)] = -1.0
+    T = np.sort(np.argsort(slack, kind="stable")[: n + 1])
+    model = _highs(ch)
+    v, it, s, ok, st = _verify(model, T, "max")
+    out = {"highs_lam2_s": s, "highs_lam2_iters": it, "highs_lam2_basis_accepted": ok,
+           "dlam2": abs(v - lam2) / scale}
+    tab = dense_lp.Tableau(A, bb, e, T)
+    tab0 = _min_start(A, bb, e, tab, 2 * n, _NoBook()) if not tab.singular else None
+
+    def dense_basis(sense, k):
+        t = tab if sense == "max" else tab0
+        if t is None or t.singular:
+            return None
+        ans = dense_lp.batch_dual_simplex(t, [(k,)])[0]
+        return ans.basis if ans.status == "optimal" else None
+
+    def one_row(sense, k):
+        t = time.perf_counter()
+        v, it, s, ok, st = _verify(model, dense_basis(sense, k), sense, tight=(k,))
+        return v, it, time.perf_counter() - t, ok
+
     k = b.limiting_constraint
     if k >= 0 and np.isfinite(b.lam1):
-        t = time.perf_counter()
-        if b.lam1 > 0:  # lam1 = lam_high of the limiting row
-            val, ref = model.run("max", tight=(k,)), b.lam1 / sc.load_factor
-        else:  # lam1 = 0: the row is inactive at lam = 0 (lam_low > 0, or never active)
-            val, ref = model.run("min", tight=(k,)), b.lam_low[k] / sc.load_factor
-        v = float(val.x[-1]) if val.status == "optimal" else np.nan
-        out["highs_lam1_s"] = time.perf_counter() - t
-        out["dlam1"] = abs(v - ref) / max(1.0, abs(lam2)) if np.isfinite(ref) else \
-            (0.0 if np.isnan(v) else 1.0)
+        sense, ref = ("max", b.lam1 / lf) if b.lam1 > 0 else ("min", b.lam_low[k] / lf)
+        v, it, s, ok = one_row(sense, k)
+        out.update(highs_lam1_s=s, highs_lam1_iters=it, highs_lam1_basis_accepted=ok,
+                   dlam1=abs(v - ref) / scale if np.isfinite(ref) else
+                   (0.0 if np.isnan(v) else 1.0))
+    spot = []
+    lam1 = b.lam1 / lf
+    for r in rng.choice(2 * n, size=min(SPOT_ROWS, 2 * n), replace=False):
+        r = int(r)
+        hi, lo = b.lam_high[r] / lf, b.lam_low[r] / lf
+        vh, ith, sh, okh = one_row("max", r)
+        vl, itl, sl, okl = one_row("min", r)
+        exact = bool(b.lam_high_exact[r])
+        if np.isnan(hi):
+            dh = 0.0 if np.isnan(vh) else 1.0
+        elif exact:
+            dh = abs(vh - hi) / scale
+        else:  # a proven lower bound: HiGHS's exact value must not be below it (nor below lam1)
+            dh = max(hi - vh, lam1 - vh, 0.0) / scale
+        dl = (0.0 if np.isnan(vl) else 1.0) if np.isnan(lo) else abs(max(vl, 0.0) - lo) / scale
+        spot.append(dict(row=r, exact=exact, dhigh=dh, dlow=dl, iters=[ith, itl],
+                         seconds=sh + sl, accepted=[okh, okl]))
+    out["spot"] = spot
+    out["dspot"] = max([max(d["dhigh"], d["dlow"]) for d in spot], default=0.0)
     return out
 
 
@@ -130,7 +210,10 @@ def one(kind, n, i):
                fallbacks=sum(s.fallbacks for s in b.stages),
                stages=[s.to_dict() for s in b.stages], residual=max(b.residuals.values()),
                load=os.getloadavg()[0])
-    rec.update(check_with_highs(b))
+    print(json.dumps(rec), flush=True)  # (kept by the driver if the check does not finish)
+    c = time.process_time()
+    rec.update(check_with_highs(b, np.random.default_rng(SEED0 + 7919 * n + i)))
+    rec["check_cpu_seconds"] = time.process_time() - c
     print(json.dumps(rec), flush=True)
 
 
@@ -147,14 +230,21 @@ def drive(args):
                 continue
             env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1",
                        NUMBA_NUM_THREADS="1")
-            p = subprocess.run([sys.executable, __file__, "--one", args.kind, str(n), str(i)],
-                               capture_output=True, text=True, env=env)
-            lines = [ln for ln in p.stdout.splitlines() if ln.startswith("{")]
-            if p.returncode or not lines:
-                rec = dict(kind=args.kind, n=n, i=i, error=p.stderr[-2000:])
-                line = json.dumps(rec)
+            try:
+                p = subprocess.run([sys.executable, __file__, "--one", args.kind, str(n), str(i)],
+                                   capture_output=True, text=True, env=env, timeout=args.timeout)
+                stdout, stderr, rc = p.stdout, p.stderr, p.returncode
+            except subprocess.TimeoutExpired as exc:  # (the child is killed)
+                stdout, stderr, rc = exc.stdout or "", f"timeout after {args.timeout} s", -9
+                stdout = stdout.decode() if isinstance(stdout, bytes) else stdout
+            lines = [ln for ln in stdout.splitlines() if ln.startswith("{")]
+            if not lines:
+                line = json.dumps(dict(kind=args.kind, n=n, i=i, error=stderr[-2000:]))
             else:
-                line = lines[-1]
+                rec = json.loads(lines[-1])
+                if "dlam2" not in rec:  # solved, but the check did not finish
+                    rec["check_error"] = stderr[-2000:] or f"exit status {rc}"
+                line = json.dumps(rec)
             with out.open("a") as f:
                 f.write(line + "\n")
 
@@ -188,6 +278,7 @@ if __name__ == "__main__":
     ap.add_argument("--sizes", default="500,1000,2000")
     ap.add_argument("--count", type=int, default=20)
     ap.add_argument("--out", default="bounds_realizations.jsonl")
+    ap.add_argument("--timeout", type=float, default=3600.0, help="wall seconds per realization")
     ap.add_argument("--one", nargs=3, metavar=("KIND", "N", "I"))
     ap.add_argument("--report", metavar="JSONL")
     a = ap.parse_args()
