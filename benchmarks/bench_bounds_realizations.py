@@ -13,16 +13,21 @@ Kinds:
   ``load_cycle(static=(-1, 0, -1), cyclic=(0, 1, 0))``; realization ``i`` takes density
   ``DENSITIES[i % 3]``, friction ``FRICTIONS[(i // 3) % 3]`` and seed ``SEED0 + i`` (seeds the
   tests do not use);
+* ``issue``: the network of issue 26, ``sample_crack_set(N, density=0.1, rng=77)``, friction
+  0.6, the same load (``--count 1``);
 * ``dense``: ``bench_bounds.random_problem(N, seed, friction)`` (``K = M M^T + I``);
-* ``fe``: the strip of ``bench_fe_bounds.py`` (``fe.rectangle(nx / 100, 0.1, nx, 8)``), friction
-  and cyclic shear drawn per realization.
+* ``fe``: the strip of ``bench_fe_bounds.py`` with ``N`` contact nodes (``fe.rectangle((N - 1)
+  / 100, 0.1, N - 1, 8)``, held at its left end, bottom on the obstacle), dead load: top
+  traction ``(0, -1)``; per realization (seed ``SEED0 + i``) the friction ``U(0.3, 0.9)`` and a
+  cyclic top traction ``(a cos + c sin, p cos)`` with ``a ~ U(0.2, 0.6)``, ``p ~ U(-0.3, 0.3)``,
+  ``c ~ U(0, 0.3)`` (unit load cases, condensed once and cached in ``/tmp/fe_bounds_cache``).
 
 Per realization: the wall and CPU time of ``shakedown_bounds`` (default options; with one BLAS
 thread the CPU time is the time on one unshared core), peak RSS, ``lam1``,
-``lam2``, the stages' paths and fallbacks (:attr:`ShakedownBounds.stages`), and a check against
-HiGHS: the ``lam2`` LP solved by HiGHS from the dense optimal basis (HiGHS's own optimality
-check of that basis; 0 iterations when it agrees) and the LP that decides ``lam1`` (``max lam``
-with the limiting row tight, or ``min lam`` with a row inactive at 0), each compared to 1e-9
+``lam2``, the stages' paths and fallbacks (:attr:`ShakedownBounds.stages`), and the checks by
+HiGHS of :func:`check_with_highs` (the ``lam2`` LP, the LP deciding ``lam1`` and three random
+rows' ``lam_high`` and ``lam_low``, each handed to HiGHS with the dense optimal basis as start
+and HiGHS's tolerances at 1e-9), each compared to 1e-9
 relative.  Results are appended as JSON lines; an interrupted run resumes where it stopped.
 """
 
@@ -57,6 +62,13 @@ def build(kind, n, i):
         m = cn.kachanov_model(cs, shear_modulus=1.0, poisson_ratio=0.25, friction=friction)
         return m.system, m.load_cycle(static=(-1.0, 0.0, -1.0), cyclic=(0.0, 1.0, 0.0)), \
             dict(density=density, friction=friction, seed=SEED0 + i)
+    if kind == "issue":  # the network of issue 26 (n = 2000 there), i ignored
+        import crack_networks as cn
+
+        cs = cn.sample_crack_set(n, density=0.1, half_length=1.0, min_spacing=0.1, rng=77)
+        m = cn.kachanov_model(cs, shear_modulus=1.0, poisson_ratio=0.25, friction=0.6)
+        return m.system, m.load_cycle(static=(-1.0, 0.0, -1.0), cyclic=(0.0, 1.0, 0.0)), \
+            dict(density=0.1, friction=0.6, seed=77)
     if kind == "dense":
         sys.path.insert(0, str(Path(__file__).parent))
         from bench_bounds import random_problem
@@ -68,15 +80,20 @@ def build(kind, n, i):
         from shakedown import fe
 
         rng = np.random.default_rng(SEED0 + i)
-        friction, shear = float(rng.uniform(0.3, 0.9)), float(rng.uniform(0.2, 0.6))
-        loads = {"dead": fe.Traction("top", (0.0, -1.0)), "shake": fe.Traction("top", (shear, 0))}
-        model = fe.FEModel(fe.rectangle(n / 100, 0.1, n, 8), fe.isotropic(1.0, 0.3),
+        friction = float(rng.uniform(0.3, 0.9))
+        shear, press, rot = rng.uniform(0.2, 0.6), rng.uniform(-0.3, 0.3), rng.uniform(0.0, 0.3)
+        # unit load cases (one condensation, cached), combined per realization
+        loads = {"dead": fe.Traction("top", (0.0, -1.0)), "shear": fe.Traction("top", (1.0, 0)),
+                 "press": fe.Traction("top", (0.0, 1.0))}
+        model = fe.FEModel(fe.rectangle((n - 1) / 100, 0.1, n - 1, 8), fe.isotropic(1.0, 0.3),
                            dirichlet={"left": "xy"}, contact=["bottom"], loads=loads,
                            friction=friction)
         cm = model.condense(cache_dir="/tmp/fe_bounds_cache")
-        return cm.system, cm.load_cycle(static="dead", cyclic="shake"), \
-            dict(friction=friction, shear=shear, seed=SEED0 + i)
-    raise ValueError(f"kind must be crack, dense or fe; got {kind!r}")
+        load = cm.load_cycle(static="dead", cyclic={"shear": shear, "press": press},
+                             cyclic_sin={"shear": rot})
+        return cm.system, load, dict(friction=friction, shear=float(shear), press=float(press),
+                                     rot=float(rot), seed=SEED0 + i)
+    raise ValueError(f"kind must be crack, issue, dense or fe; got {kind!r}")
 
 
 #: HiGHS's primal and dual feasibility tolerances in the check (its default is 1e-7).
@@ -249,27 +266,50 @@ def drive(args):
                 f.write(line + "\n")
 
 
-def report(path):
-    rows = [json.loads(ln) for ln in Path(path).read_text().splitlines()]
+def _fallback_stages(rs):
+    """``stage: LPs`` over the realizations (the stages that fell back)."""
+    count = {}
+    for r in rs:
+        for st in r["stages"]:
+            if st["fallbacks"]:
+                count[st["stage"]] = count.get(st["stage"], 0) + st["fallbacks"]
+    return ", ".join(f"{k}: {v}" for k, v in count.items()) or "none"
+
+
+def report(paths):
+    rows = [json.loads(ln) for p in paths for ln in Path(p).read_text().splitlines()]
     keys = sorted({(r["kind"], r["n"]) for r in rows})
-    print("| kind | N | realizations | median CPU s | worst CPU s | worst wall s | worst peak RSS "
-          "GB | fallbacks (LPs, realizations) | worst lam2 diff to HiGHS | worst lam1-LP diff | "
+    print("| kind | N | realizations | median CPU s | worst CPU s | median wall s | worst wall s | "
+          "worst peak RSS GB | fallbacks: LPs (realizations; stages) | worst diff to HiGHS: "
+          "lam2 / lam1 LP / spot rows | HiGHS pivots from the dense bases (max) | load | "
           "errors |")
-    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for kind, n in keys:
         rs = [r for r in rows if r["kind"] == kind and r["n"] == n and "error" not in r]
         err = sum(1 for r in rows if r["kind"] == kind and r["n"] == n and "error" in r)
         if not rs:
-            print(f"| {kind} | {n} | 0 | | | | | | | | {err} |")
+            print(f"| {kind} | {n} | 0 | | | | | | | | | | {err} |")
             continue
         s = np.array([r["cpu_seconds"] for r in rs])
+        w = np.array([r["seconds"] for r in rs])
         fb = [r["fallbacks"] for r in rs]
+        ck = [r for r in rs if "dlam2" in r]
+        unchecked = len(rs) - len(ck)
+
+        def worst(key, ck=ck):
+            vals = [r[key] for r in ck if key in r]
+            return f"{max(vals):.1e}" if vals else "-"
+
+        piv = max((max([r["highs_lam2_iters"], r.get("highs_lam1_iters", 0)]
+                       + [max(d["iters"]) for d in r["spot"]]) for r in ck), default=0)
+        loads = [r["load"] for r in rs]
         print(f"| {kind} | {n} | {len(rs)} | {np.median(s):.3g} | {s.max():.3g} "
-              f"(i = {rs[int(np.argmax(s))]['i']}) | {max(r['seconds'] for r in rs):.3g} | "
+              f"(i = {rs[int(np.argmax(s))]['i']}) | {np.median(w):.3g} | {w.max():.3g} | "
               f"{max(r['rss_gb'] for r in rs):.2f} | "
-              f"{sum(fb)}, {sum(1 for f in fb if f)} | "
-              f"{max(r['dlam2'] for r in rs):.1e} | "
-              f"{max(r.get('dlam1', 0.0) for r in rs):.1e} | {err} |")
+              f"{sum(fb)} ({sum(1 for f in fb if f)}; {_fallback_stages(rs)}) | "
+              f"{worst('dlam2')} / {worst('dlam1')} / {worst('dspot')}"
+              f"{f' ({unchecked} not checked)' if unchecked else ''} | {piv} | "
+              f"{min(loads):.1f}-{max(loads):.1f} | {err} |")
 
 
 if __name__ == "__main__":
@@ -280,7 +320,7 @@ if __name__ == "__main__":
     ap.add_argument("--out", default="bounds_realizations.jsonl")
     ap.add_argument("--timeout", type=float, default=3600.0, help="wall seconds per realization")
     ap.add_argument("--one", nargs=3, metavar=("KIND", "N", "I"))
-    ap.add_argument("--report", metavar="JSONL")
+    ap.add_argument("--report", metavar="JSONL", nargs="+")
     a = ap.parse_args()
     if a.one:
         one(a.one[0], int(a.one[1]), int(a.one[2]))
