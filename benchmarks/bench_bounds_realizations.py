@@ -173,10 +173,13 @@ def check_with_highs(b, rng):
     out = {"highs_lam2_s": s, "highs_lam2_iters": it, "highs_lam2_basis_accepted": ok,
            "dlam2": abs(v - lam2) / scale}
     tab = dense_lp.Tableau(A, bb, e, T)
-    tab0 = _min_start(A, bb, e, tab, 2 * n, _NoBook()) if not tab.singular else None
+    starts = {"max": tab}
 
     def dense_basis(sense, k):
-        t = tab if sense == "max" else tab0
+        if sense not in starts:  # the lam = 0 vertex, only when a min LP is checked
+            starts[sense] = _min_start(A, bb, e, tab, 2 * n, _NoBook()) if not tab.singular \
+                else None
+        t = starts[sense]
         if t is None or t.singular:
             return None
         ans = dense_lp.batch_dual_simplex(t, [(k,)])[0]
