@@ -138,7 +138,7 @@ def _verify(model, T, sense, tight=()):
     return v, int(ans.iterations), time.perf_counter() - t, bool(accepted), ans.status
 
 
-def check_with_highs(b, rng):
+def check_with_highs(b, rng, on_partial=None):
     """Independent checks by HiGHS (nondimensional LPs, relative to ``max(1, lam2)``).
 
     Each LP is handed to HiGHS (tolerances :data:`CHECK_TOL`) with the dense path's optimal
@@ -197,6 +197,8 @@ def check_with_highs(b, rng):
         out.update(highs_lam1_s=s, highs_lam1_iters=it, highs_lam1_basis_accepted=ok,
                    dlam1=abs(v - ref) / scale if np.isfinite(ref) else
                    (0.0 if np.isnan(v) else 1.0))
+    if on_partial is not None:  # (lam2 and lam1 checked: kept if the spot rows do not finish)
+        on_partial(out)
     spot = []
     lam1 = b.lam1 / lf
     for r in rng.choice(2 * n, size=min(SPOT_ROWS if n <= SPOT_MAX_N else 0, 2 * n),
@@ -256,7 +258,12 @@ def one(kind, n, i):
                load=os.getloadavg()[0], calib_cpu=(calib + calibrate()) / 2)
     print(json.dumps(rec), flush=True)  # (kept by the driver if the check does not finish)
     c = time.process_time()
-    rec.update(check_with_highs(b, np.random.default_rng(SEED0 + 7919 * n + i)))
+
+    def partial(out):
+        print(json.dumps({**rec, **out, "check_cpu_seconds": time.process_time() - c}),
+              flush=True)
+
+    rec.update(check_with_highs(b, np.random.default_rng(SEED0 + 7919 * n + i), partial))
     rec["check_cpu_seconds"] = time.process_time() - c
     print(json.dumps(rec), flush=True)
 
@@ -286,7 +293,7 @@ def drive(args):
                 line = json.dumps(dict(kind=args.kind, n=n, i=i, error=stderr[-2000:]))
             else:
                 rec = json.loads(lines[-1])
-                if "dlam2" not in rec:  # solved, but the check did not finish
+                if "dlam2" not in rec or "spot" not in rec:  # the check did not finish
                     rec["check_error"] = stderr[-2000:] or f"exit status {rc}"
                 line = json.dumps(rec)
             with out.open("a") as f:
