@@ -345,7 +345,7 @@ def report(paths):
             return f"{max(vals):.1e}" if vals else "-"
 
         piv = max((max([r["highs_lam2_iters"], r.get("highs_lam1_iters", 0)]
-                       + [max(d["iters"]) for d in r["spot"]]) for r in ck), default=0)
+                       + [max(d["iters"]) for d in r.get("spot", [])]) for r in ck), default=0)
         loads = [r["load"] for r in rs]
         print(f"| {kind} | {n} | {len(rs)} | {np.median(s):.3g} | {s.max():.3g} "
               f"(i = {rs[int(np.argmax(s))]['i']}) | {np.median(w):.3g} | {w.max():.3g} | "
