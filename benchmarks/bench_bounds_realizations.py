@@ -125,13 +125,15 @@ def _highs(ch):
     h = model.lp._h
     for opt in ("primal_feasibility_tolerance", "dual_feasibility_tolerance"):
         h.setOptionValue(opt, CHECK_TOL)
-    h.setOptionValue("time_limit", 900.0)
+    h.setOptionValue("time_limit", 300.0)
     return model
 
 
 def _verify(model, T, sense, tight=()):
     """HiGHS started from the basis ``T`` (dense rows): its value, iterations and seconds."""
-    accepted = T is not None and model.start_from(np.sort(T))
+    if T is None:  # no dense optimal basis to hand over: not checked (HiGHS cold is too slow)
+        return np.nan, -1, 0.0, False, "no dense basis"
+    accepted = model.start_from(np.sort(T))
     t = time.perf_counter()
     ans = model.run(sense, tight=tight)
     v = float(ans.x[-1]) if ans.status == "optimal" else np.nan
@@ -171,7 +173,7 @@ def check_with_highs(b, rng, on_partial=None):
     model = _highs(ch)
     v, it, s, ok, st = _verify(model, T, "max")
     out = {"highs_lam2_s": s, "highs_lam2_iters": it, "highs_lam2_basis_accepted": ok,
-           "dlam2": abs(v - lam2) / scale}
+           "highs_lam2_status": st, "dlam2": abs(v - lam2) / scale if st == "optimal" else np.nan}
     tab = dense_lp.Tableau(A, bb, e, T)
     starts = {"max": tab}
 
@@ -188,15 +190,23 @@ def check_with_highs(b, rng, on_partial=None):
     def one_row(sense, k):
         t = time.perf_counter()
         v, it, s, ok, st = _verify(model, dense_basis(sense, k), sense, tight=(k,))
-        return v, it, time.perf_counter() - t, ok
+        return v, it, time.perf_counter() - t, ok, st
+
+    def diff(v, st, ref):
+        """|v - ref| / scale; nan when HiGHS did not decide (time limit, no basis to check)."""
+        if st not in ("optimal", "infeasible"):
+            return np.nan
+        if np.isnan(ref):  # never active: HiGHS must find the LP infeasible
+            return 0.0 if st == "infeasible" else 1.0
+        return abs(v - ref) / scale if st == "optimal" else 1.0
 
     k = b.limiting_constraint
     if k >= 0 and np.isfinite(b.lam1):
         sense, ref = ("max", b.lam1 / lf) if b.lam1 > 0 else ("min", b.lam_low[k] / lf)
-        v, it, s, ok = one_row(sense, k)
+        v, it, s, ok, st = one_row(sense, k)
         out.update(highs_lam1_s=s, highs_lam1_iters=it, highs_lam1_basis_accepted=ok,
-                   dlam1=abs(v - ref) / scale if np.isfinite(ref) else
-                   (0.0 if np.isnan(v) else 1.0))
+                   highs_lam1_status=st, dlam1=diff(max(v, 0.0) if sense == "min" else v, st,
+                                                    ref))
     if on_partial is not None:  # (lam2 and lam1 checked: kept if the spot rows do not finish)
         on_partial(out)
     spot = []
@@ -205,20 +215,22 @@ def check_with_highs(b, rng, on_partial=None):
                         replace=False):
         r = int(r)
         hi, lo = b.lam_high[r] / lf, b.lam_low[r] / lf
-        vh, ith, sh, okh = one_row("max", r)
-        vl, itl, sl, okl = one_row("min", r)
+        vh, ith, sh, okh, sth = one_row("max", r)
+        vl, itl, sl, okl, stl = one_row("min", r)
         exact = bool(b.lam_high_exact[r])
-        if np.isnan(hi):
-            dh = 0.0 if np.isnan(vh) else 1.0
-        elif exact:
-            dh = abs(vh - hi) / scale
-        else:  # a proven lower bound: HiGHS's exact value must not be below it (nor below lam1)
-            dh = max(hi - vh, lam1 - vh, 0.0) / scale
-        dl = (0.0 if np.isnan(vl) else 1.0) if np.isnan(lo) else abs(max(vl, 0.0) - lo) / scale
+        if exact or np.isnan(hi):
+            dh = diff(vh, sth, hi)
+        elif sth == "optimal":  # a proven lower bound: HiGHS's value must not be below it
+            dh = max(hi - vh, lam1 - vh, 0.0) / scale  # (nor below lam1)
+        else:
+            dh = np.nan
+        dl = diff(max(vl, 0.0), stl, lo)
         spot.append(dict(row=r, exact=exact, dhigh=dh, dlow=dl, iters=[ith, itl],
-                         seconds=sh + sl, accepted=[okh, okl]))
+                         seconds=sh + sl, accepted=[okh, okl], status=[sth, stl]))
     out["spot"] = spot
-    out["dspot"] = max([max(d["dhigh"], d["dlow"]) for d in spot], default=0.0)
+    d = [x for r in spot for x in (r["dhigh"], r["dlow"]) if not np.isnan(x)]
+    out["dspot"] = max(d, default=0.0)
+    out["spot_unchecked"] = int(sum(np.isnan(x) for r in spot for x in (r["dhigh"], r["dlow"])))
     return out
 
 
