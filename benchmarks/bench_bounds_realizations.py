@@ -353,8 +353,10 @@ def report(paths):
         unchecked = len(rs) - len(ck)
 
         def worst(key, ck=ck):
-            vals = [r[key] for r in ck if key in r]
-            return f"{max(vals):.1e}" if vals else "-"
+            vals = [r[key] for r in ck if key in r and not np.isnan(r[key])]
+            miss = sum(1 for r in ck if key not in r or np.isnan(r[key]))
+            text = f"{max(vals):.1e}" if vals else "-"
+            return text + (f" ({miss} undecided)" if miss and vals else "")
 
         piv = max((max([r["highs_lam2_iters"], r.get("highs_lam1_iters", 0)]
                        + [max(d["iters"]) for d in r.get("spot", [])]) for r in ck), default=0)
