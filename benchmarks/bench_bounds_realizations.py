@@ -13,16 +13,21 @@ Kinds:
   ``load_cycle(static=(-1, 0, -1), cyclic=(0, 1, 0))``; realization ``i`` takes density
   ``DENSITIES[i % 3]``, friction ``FRICTIONS[(i // 3) % 3]`` and seed ``SEED0 + i`` (seeds the
   tests do not use);
+* ``issue``: the network of issue 26, ``sample_crack_set(N, density=0.1, rng=77)``, friction
+  0.6, the same load (``--count 1``);
 * ``dense``: ``bench_bounds.random_problem(N, seed, friction)`` (``K = M M^T + I``);
-* ``fe``: the strip of ``bench_fe_bounds.py`` (``fe.rectangle(nx / 100, 0.1, nx, 8)``), friction
-  and cyclic shear drawn per realization.
+* ``fe``: the strip of ``bench_fe_bounds.py`` with ``N`` contact nodes (``fe.rectangle((N - 1)
+  / 100, 0.1, N - 1, 8)``, held at its left end, bottom on the obstacle), dead load: top
+  traction ``(0, -1)``; per realization (seed ``SEED0 + i``) the friction ``U(0.3, 0.9)`` and a
+  cyclic top traction ``(a cos + c sin, p cos)`` with ``a ~ U(0.2, 0.6)``, ``p ~ U(-0.3, 0.3)``,
+  ``c ~ U(0, 0.3)`` (unit load cases, condensed once and cached in ``/tmp/fe_bounds_cache``).
 
 Per realization: the wall and CPU time of ``shakedown_bounds`` (default options; with one BLAS
 thread the CPU time is the time on one unshared core), peak RSS, ``lam1``,
-``lam2``, the stages' paths and fallbacks (:attr:`ShakedownBounds.stages`), and a check against
-HiGHS: the ``lam2`` LP solved by HiGHS from the dense optimal basis (HiGHS's own optimality
-check of that basis; 0 iterations when it agrees) and the LP that decides ``lam1`` (``max lam``
-with the limiting row tight, or ``min lam`` with a row inactive at 0), each compared to 1e-9
+``lam2``, the stages' paths and fallbacks (:attr:`ShakedownBounds.stages`), and the checks by
+HiGHS of :func:`check_with_highs` (the ``lam2`` LP, the LP deciding ``lam1`` and three random
+rows' ``lam_high`` and ``lam_low``, each handed to HiGHS with the dense optimal basis as start
+and HiGHS's tolerances at 1e-9), each compared to 1e-9
 relative.  Results are appended as JSON lines; an interrupted run resumes where it stopped.
 """
 
@@ -57,6 +62,13 @@ def build(kind, n, i):
         m = cn.kachanov_model(cs, shear_modulus=1.0, poisson_ratio=0.25, friction=friction)
         return m.system, m.load_cycle(static=(-1.0, 0.0, -1.0), cyclic=(0.0, 1.0, 0.0)), \
             dict(density=density, friction=friction, seed=SEED0 + i)
+    if kind == "issue":  # the network of issue 26 (n = 2000 there), i ignored
+        import crack_networks as cn
+
+        cs = cn.sample_crack_set(n, density=0.1, half_length=1.0, min_spacing=0.1, rng=77)
+        m = cn.kachanov_model(cs, shear_modulus=1.0, poisson_ratio=0.25, friction=0.6)
+        return m.system, m.load_cycle(static=(-1.0, 0.0, -1.0), cyclic=(0.0, 1.0, 0.0)), \
+            dict(density=0.1, friction=0.6, seed=77)
     if kind == "dense":
         sys.path.insert(0, str(Path(__file__).parent))
         from bench_bounds import random_problem
@@ -68,59 +80,182 @@ def build(kind, n, i):
         from shakedown import fe
 
         rng = np.random.default_rng(SEED0 + i)
-        friction, shear = float(rng.uniform(0.3, 0.9)), float(rng.uniform(0.2, 0.6))
-        loads = {"dead": fe.Traction("top", (0.0, -1.0)), "shake": fe.Traction("top", (shear, 0))}
-        model = fe.FEModel(fe.rectangle(n / 100, 0.1, n, 8), fe.isotropic(1.0, 0.3),
+        friction = float(rng.uniform(0.3, 0.9))
+        shear, press, rot = rng.uniform(0.2, 0.6), rng.uniform(-0.3, 0.3), rng.uniform(0.0, 0.3)
+        # unit load cases (one condensation, cached), combined per realization
+        loads = {"dead": fe.Traction("top", (0.0, -1.0)), "shear": fe.Traction("top", (1.0, 0)),
+                 "press": fe.Traction("top", (0.0, 1.0))}
+        model = fe.FEModel(fe.rectangle((n - 1) / 100, 0.1, n - 1, 8), fe.isotropic(1.0, 0.3),
                            dirichlet={"left": "xy"}, contact=["bottom"], loads=loads,
                            friction=friction)
         cm = model.condense(cache_dir="/tmp/fe_bounds_cache")
-        return cm.system, cm.load_cycle(static="dead", cyclic="shake"), \
-            dict(friction=friction, shear=shear, seed=SEED0 + i)
-    raise ValueError(f"kind must be crack, dense or fe; got {kind!r}")
+        load = cm.load_cycle(static="dead", cyclic={"shear": shear, "press": press},
+                             cyclic_sin={"shear": rot})
+        return cm.system, load, dict(friction=friction, shear=float(shear), press=float(press),
+                                     rot=float(rot), seed=SEED0 + i)
+    raise ValueError(f"kind must be crack, issue, dense or fe; got {kind!r}")
 
 
-def check_with_highs(b):
-    """Relative differences of lam2 and of the LP deciding lam1 to HiGHS (nondimensional)."""
-    from shakedown.bounds.constraints import Scales
+#: HiGHS's primal and dual feasibility tolerances in the check (its default is 1e-7).
+CHECK_TOL = 1e-9
+#: Rows drawn per realization for the spot checks of lam_high and lam_low (up to N = 1000;
+#: none above: each HiGHS check from a given basis factorizes it anew, ~20 s CPU at N = 2000).
+SPOT_ROWS = 3
+SPOT_MAX_N = 1000
+
+
+class _NoBook:
+    """What :func:`dense_path._min_start` records (nothing here)."""
+
+    def record(self, ans):
+        pass
+
+
+def _dense_lp(cs):
+    """The dense path's LP ``max e.x, A x <= b`` in ``x = (v, lam)`` (:mod:`.dense_path`)."""
+    n = cs.n_nodes
+    A = np.vstack([np.hstack([cs.G, -cs.m[:, None]]), np.r_[np.zeros(n), -1.0][None, :]])
+    return A, np.r_[cs.c, 0.0], np.r_[np.zeros(n), 1.0]
+
+
+def _highs(ch):
     from shakedown.bounds.highs_path import HighsModel
+
+    model = HighsModel(ch)
+    h = model.lp._h
+    for opt in ("primal_feasibility_tolerance", "dual_feasibility_tolerance"):
+        h.setOptionValue(opt, CHECK_TOL)
+    h.setOptionValue("time_limit", 300.0)
+    return model
+
+
+def _verify(model, T, sense, tight=()):
+    """HiGHS started from the basis ``T`` (dense rows): its value, iterations and seconds."""
+    if T is None:  # no dense optimal basis to hand over: not checked (HiGHS cold is too slow)
+        return np.nan, -1, 0.0, False, "no dense basis"
+    accepted = model.start_from(np.sort(T))
+    t = time.perf_counter()
+    ans = model.run(sense, tight=tight)
+    v = float(ans.x[-1]) if ans.status == "optimal" else np.nan
+    return v, int(ans.iterations), time.perf_counter() - t, bool(accepted), ans.status
+
+
+def check_with_highs(b, rng, on_partial=None):
+    """Independent checks by HiGHS (nondimensional LPs, relative to ``max(1, lam2)``).
+
+    Each LP is handed to HiGHS (tolerances :data:`CHECK_TOL`) with the dense path's optimal
+    basis as its start; HiGHS computes that basis's primal and dual solution with its own
+    factorization, checks optimality in its own terms and pivots on if it is not optimal (the
+    iteration count says; 0 = the dense basis is HiGHS's optimum too).  Checked: the ``lam2`` LP
+    (basis rebuilt from the result's certificate and state), the LP deciding ``lam1`` (``max
+    lam`` with the limiting row tight; ``min lam`` when ``lam1 = 0``), and :data:`SPOT_ROWS`
+    random rows' ``lam_high`` (equal where exact, ``>=`` the proven bound elsewhere, ``>= lam1``)
+    and ``lam_low`` (equal).  The bases of the last three are found here by the dense dual
+    simplex from the ``lam2`` basis (``max``) or the ``lam = 0`` vertex (``min``)."""
+    from shakedown import dense_lp
+    from shakedown.bounds.constraints import Scales
+    from shakedown.bounds.dense_path import _min_start
 
     cs = b.constraints
     sc = Scales.of(cs)
     ch = sc.nondimensional(cs)
     n = ch.n_nodes
-    model = HighsModel(ch)
-    lam2 = b.lam2 / sc.load_factor
-    # the dense optimum's tight rows as HiGHS's start basis (HiGHS checks it in its own terms)
-    A = np.hstack([ch.G, -ch.m[:, None]])
+    A, bb, e = _dense_lp(ch)
+    lf = sc.load_factor
+    lam2 = b.lam2 / lf
+    scale = max(1.0, abs(lam2))
+    # the dense optimum's tight rows: the certificate's rows first, then the smallest slacks
     x = np.r_[b.state_at_lam2 / sc.slip, lam2]
-    slack = (ch.c - A @ x) / (np.linalg.norm(A, axis=1) * max(1.0, np.abs(x).max()))
+    slack = (bb - A @ x) / (np.linalg.norm(A, axis=1) * max(1.0, np.abs(x).max()))
     y = b.certificate
-    slack[y > 1e-12 * max(np.abs(y).max(initial=0.0), 1e-300)] = -1.0  # the certificate's rows
-    T = np.argsort(slack, kind="stable")[: n + 1 if lam2 > 0 else n]  # N + 1 rows in all
-    T = np.r_[T, 2 * n] if lam2 <= 0 else T  # lam = 0: the row -lam <= 0 is one of them
-    model.start_from(np.sort(T))
-    t = time.perf_counter()
-    ans = model.run("max")
-    out = {"highs_lam2_s": time.perf_counter() - t, "highs_lam2_iters": int(ans.iterations)}
-    out["dlam2"] = abs(float(ans.x[-1]) - lam2) / max(1.0, abs(lam2))
+    slack[: 2 * n][y > 1e-12 * max(np.abs(y).max(initial=0.0), 1e-300)] = -1.0
+    T = np.sort(np.argsort(slack, kind="stable")[: n + 1])
+    model = _highs(ch)
+    v, it, s, ok, st = _verify(model, T, "max")
+    out = {"highs_lam2_s": s, "highs_lam2_iters": it, "highs_lam2_basis_accepted": ok,
+           "highs_lam2_status": st, "dlam2": abs(v - lam2) / scale if st == "optimal" else np.nan}
+    tab = dense_lp.Tableau(A, bb, e, T)
+    starts = {"max": tab}
+
+    def dense_basis(sense, k):
+        if sense not in starts:  # the lam = 0 vertex, only when a min LP is checked
+            starts[sense] = _min_start(A, bb, e, tab, 2 * n, _NoBook()) if not tab.singular \
+                else None
+        t = starts[sense]
+        if t is None or t.singular:
+            return None
+        ans = dense_lp.batch_dual_simplex(t, [(k,)])[0]
+        return ans.basis if ans.status == "optimal" else None
+
+    def one_row(sense, k):
+        t = time.perf_counter()
+        v, it, s, ok, st = _verify(model, dense_basis(sense, k), sense, tight=(k,))
+        return v, it, time.perf_counter() - t, ok, st
+
+    def diff(v, st, ref):
+        """|v - ref| / scale; nan when HiGHS did not decide (time limit, no basis to check)."""
+        if st not in ("optimal", "infeasible"):
+            return np.nan
+        if np.isnan(ref):  # never active: HiGHS must find the LP infeasible
+            return 0.0 if st == "infeasible" else 1.0
+        return abs(v - ref) / scale if st == "optimal" else 1.0
+
     k = b.limiting_constraint
     if k >= 0 and np.isfinite(b.lam1):
-        t = time.perf_counter()
-        if b.lam1 > 0:  # lam1 = lam_high of the limiting row
-            val, ref = model.run("max", tight=(k,)), b.lam1 / sc.load_factor
-        else:  # lam1 = 0: the row is inactive at lam = 0 (lam_low > 0, or never active)
-            val, ref = model.run("min", tight=(k,)), b.lam_low[k] / sc.load_factor
-        v = float(val.x[-1]) if val.status == "optimal" else np.nan
-        out["highs_lam1_s"] = time.perf_counter() - t
-        out["dlam1"] = abs(v - ref) / max(1.0, abs(lam2)) if np.isfinite(ref) else \
-            (0.0 if np.isnan(v) else 1.0)
+        sense, ref = ("max", b.lam1 / lf) if b.lam1 > 0 else ("min", b.lam_low[k] / lf)
+        v, it, s, ok, st = one_row(sense, k)
+        out.update(highs_lam1_s=s, highs_lam1_iters=it, highs_lam1_basis_accepted=ok,
+                   highs_lam1_status=st, dlam1=diff(max(v, 0.0) if sense == "min" else v, st,
+                                                    ref))
+    if on_partial is not None:  # (lam2 and lam1 checked: kept if the spot rows do not finish)
+        on_partial(out)
+    spot = []
+    lam1 = b.lam1 / lf
+    for r in rng.choice(2 * n, size=min(SPOT_ROWS if n <= SPOT_MAX_N else 0, 2 * n),
+                        replace=False):
+        r = int(r)
+        hi, lo = b.lam_high[r] / lf, b.lam_low[r] / lf
+        vh, ith, sh, okh, sth = one_row("max", r)
+        vl, itl, sl, okl, stl = one_row("min", r)
+        exact = bool(b.lam_high_exact[r])
+        if exact or np.isnan(hi):
+            dh = diff(vh, sth, hi)
+        elif sth == "optimal":  # a proven lower bound: HiGHS's value must not be below it
+            dh = max(hi - vh, lam1 - vh, 0.0) / scale  # (nor below lam1)
+        else:
+            dh = np.nan
+        dl = diff(max(vl, 0.0), stl, lo)
+        spot.append(dict(row=r, exact=exact, dhigh=dh, dlow=dl, iters=[ith, itl],
+                         seconds=sh + sl, accepted=[okh, okl], status=[sth, stl]))
+    out["spot"] = spot
+    d = [x for r in spot for x in (r["dhigh"], r["dlow"]) if not np.isnan(x)]
+    out["dspot"] = max(d, default=0.0)
+    out["spot_unchecked"] = int(sum(np.isnan(x) for r in spot for x in (r["dhigh"], r["dlow"])))
     return out
+
+
+def calibrate():
+    """CPU seconds of a fixed dense workload like the engine's (products with a 4000 x 2000
+    matrix, 64 MB, and a 1000 x 1000 LU): measured beside each realization, its ratio to the
+    smallest value of a run tells how much a loaded machine inflates the CPU time."""
+    import scipy.linalg as sla
+
+    rng = np.random.default_rng(0)
+    G, x, M = rng.standard_normal((4000, 2000)), rng.standard_normal(2000), \
+        rng.standard_normal((1000, 1000))
+    c = time.process_time()
+    for _ in range(20):
+        x = G.T @ (G @ x) / 4000.0
+    for _ in range(3):
+        sla.lu_factor(M)
+    return time.process_time() - c
 
 
 def one(kind, n, i):
     import shakedown as sd
 
     system, load, params = build(kind, n, i)
+    calib = calibrate()
     t, c = time.perf_counter(), time.process_time()
     b = sd.shakedown_bounds(system, load)
     sec, cpu = time.perf_counter() - t, time.process_time() - c
@@ -128,9 +263,20 @@ def one(kind, n, i):
                rss_gb=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6,
                lam1=b.lam1, lam2=b.lam2, limiting=b.limiting_label, n_lps=b.n_lps,
                fallbacks=sum(s.fallbacks for s in b.stages),
-               stages=[s.to_dict() for s in b.stages], residual=max(b.residuals.values()),
-               load=os.getloadavg()[0])
-    rec.update(check_with_highs(b))
+               stages=[s.to_dict() for s in b.stages],
+               # outside the stages: the constraints and the safe state (Chebyshev centre)
+               unstaged_seconds=b.solve_time - sum(s.seconds for s in b.stages),
+               residual=max(b.residuals.values()),
+               load=os.getloadavg()[0], calib_cpu=(calib + calibrate()) / 2)
+    print(json.dumps(rec), flush=True)  # (kept by the driver if the check does not finish)
+    c = time.process_time()
+
+    def partial(out):
+        print(json.dumps({**rec, **out, "check_cpu_seconds": time.process_time() - c}),
+              flush=True)
+
+    rec.update(check_with_highs(b, np.random.default_rng(SEED0 + 7919 * n + i), partial))
+    rec["check_cpu_seconds"] = time.process_time() - c
     print(json.dumps(rec), flush=True)
 
 
@@ -145,40 +291,83 @@ def drive(args):
         for i in range(args.count):
             if (args.kind, n, i) in done:
                 continue
-            env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
-            p = subprocess.run([sys.executable, __file__, "--one", args.kind, str(n), str(i)],
-                               capture_output=True, text=True, env=env)
-            lines = [ln for ln in p.stdout.splitlines() if ln.startswith("{")]
-            if p.returncode or not lines:
-                rec = dict(kind=args.kind, n=n, i=i, error=p.stderr[-2000:])
-                line = json.dumps(rec)
+            env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1",
+                       NUMBA_NUM_THREADS="1")
+            try:
+                p = subprocess.run([sys.executable, __file__, "--one", args.kind, str(n), str(i)],
+                                   capture_output=True, text=True, env=env, timeout=args.timeout)
+                stdout, stderr, rc = p.stdout, p.stderr, p.returncode
+            except subprocess.TimeoutExpired as exc:  # (the child is killed)
+                stdout, stderr, rc = exc.stdout or "", f"timeout after {args.timeout} s", -9
+                stdout = stdout.decode() if isinstance(stdout, bytes) else stdout
+            lines = [ln for ln in stdout.splitlines() if ln.startswith("{")]
+            if not lines:
+                line = json.dumps(dict(kind=args.kind, n=n, i=i, error=stderr[-2000:]))
             else:
-                line = lines[-1]
+                rec = json.loads(lines[-1])
+                if "dlam2" not in rec or "spot" not in rec:  # the check did not finish
+                    rec["check_error"] = stderr[-2000:] or f"exit status {rc}"
+                line = json.dumps(rec)
             with out.open("a") as f:
                 f.write(line + "\n")
 
 
-def report(path):
-    rows = [json.loads(ln) for ln in Path(path).read_text().splitlines()]
+def _fallback_stages(rs):
+    """``stage: LPs`` over the realizations (the stages that fell back)."""
+    count = {}
+    for r in rs:
+        for st in r["stages"]:
+            if st["fallbacks"]:
+                count[st["stage"]] = count.get(st["stage"], 0) + st["fallbacks"]
+    return ", ".join(f"{k}: {v}" for k, v in count.items()) or "none"
+
+
+def scaled(rs, cmin):
+    """The worst CPU time times ``cmin / calib_cpu`` (the load's inflation taken out, as far
+    as the calibration workload measures it); '-' without calibration."""
+    v = [r["cpu_seconds"] * cmin / r["calib_cpu"] for r in rs if "calib_cpu" in r]
+    return f"{max(v):.3g} ({len(v)})" if v else "-"
+
+
+def report(paths):
+    rows = [json.loads(ln) for p in paths for ln in Path(p).read_text().splitlines()]
     keys = sorted({(r["kind"], r["n"]) for r in rows})
-    print("| kind | N | realizations | median CPU s | worst CPU s | worst wall s | worst peak RSS "
-          "GB | fallbacks (LPs, realizations) | worst lam2 diff to HiGHS | worst lam1-LP diff | "
+    print("| kind | N | realizations | median CPU s | worst CPU s | median wall s | worst wall s | "
+          "worst CPU s scaled by the calibration | worst peak RSS GB | "
+          "fallbacks: LPs (realizations; stages) | worst diff to HiGHS: "
+          "lam2 / lam1 LP / spot rows | HiGHS pivots from the dense bases (max) | load | "
           "errors |")
-    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    cal = [r["calib_cpu"] for r in rows if "calib_cpu" in r]
+    cmin = min(cal, default=np.nan)
     for kind, n in keys:
         rs = [r for r in rows if r["kind"] == kind and r["n"] == n and "error" not in r]
         err = sum(1 for r in rows if r["kind"] == kind and r["n"] == n and "error" in r)
         if not rs:
-            print(f"| {kind} | {n} | 0 | | | | | | | | {err} |")
+            print(f"| {kind} | {n} | 0 | | | | | | | | | | | {err} |")
             continue
         s = np.array([r["cpu_seconds"] for r in rs])
+        w = np.array([r["seconds"] for r in rs])
         fb = [r["fallbacks"] for r in rs]
+        ck = [r for r in rs if "dlam2" in r]
+        unchecked = len(rs) - len(ck)
+
+        def worst(key, ck=ck):
+            vals = [r[key] for r in ck if key in r and not np.isnan(r[key])]
+            miss = sum(1 for r in ck if key not in r or np.isnan(r[key]))
+            text = f"{max(vals):.1e}" if vals else "-"
+            return text + (f" ({miss} undecided)" if miss and vals else "")
+
+        piv = max((max([r["highs_lam2_iters"], r.get("highs_lam1_iters", 0)]
+                       + [max(d["iters"]) for d in r.get("spot", [])]) for r in ck), default=0)
+        loads = [r["load"] for r in rs]
         print(f"| {kind} | {n} | {len(rs)} | {np.median(s):.3g} | {s.max():.3g} "
-              f"(i = {rs[int(np.argmax(s))]['i']}) | {max(r['seconds'] for r in rs):.3g} | "
-              f"{max(r['rss_gb'] for r in rs):.2f} | "
-              f"{sum(fb)}, {sum(1 for f in fb if f)} | "
-              f"{max(r['dlam2'] for r in rs):.1e} | "
-              f"{max(r.get('dlam1', 0.0) for r in rs):.1e} | {err} |")
+              f"(i = {rs[int(np.argmax(s))]['i']}) | {np.median(w):.3g} | {w.max():.3g} | "
+              f"{scaled(rs, cmin)} | {max(r['rss_gb'] for r in rs):.2f} | "
+              f"{sum(fb)} ({sum(1 for f in fb if f)}; {_fallback_stages(rs)}) | "
+              f"{worst('dlam2')} / {worst('dlam1')} / {worst('dspot')}"
+              f"{f' ({unchecked} not checked)' if unchecked else ''} | {piv} | "
+              f"{min(loads):.1f}-{max(loads):.1f} | {err} |")
 
 
 if __name__ == "__main__":
@@ -187,8 +376,9 @@ if __name__ == "__main__":
     ap.add_argument("--sizes", default="500,1000,2000")
     ap.add_argument("--count", type=int, default=20)
     ap.add_argument("--out", default="bounds_realizations.jsonl")
+    ap.add_argument("--timeout", type=float, default=3600.0, help="wall seconds per realization")
     ap.add_argument("--one", nargs=3, metavar=("KIND", "N", "I"))
-    ap.add_argument("--report", metavar="JSONL")
+    ap.add_argument("--report", metavar="JSONL", nargs="+")
     a = ap.parse_args()
     if a.one:
         one(a.one[0], int(a.one[1]), int(a.one[2]))

@@ -50,7 +50,7 @@ def _primal_finish(A, b, e, tab, cap=None):
     return out if not out.singular and out.dual_feasible else None
 
 
-def solve_max(A, b, e, *, max_iter=80, interior=False, why=None):
+def solve_max(A, b, e, *, max_iter=80, interior=False, why=None, accept=None):
     """``max e.x s.t. A x <= b``: interior point, basis identification, dual simplex clean-up.
 
     Returns ``(answer, tableau)`` with the tableau of the optimal basis (for warm starts), or
@@ -62,6 +62,11 @@ def solve_max(A, b, e, *, max_iter=80, interior=False, why=None):
     Chebyshev centre: :func:`~.engine.chebyshev_centre`).  ``why``: a dict that, on failure,
     receives ``"reason"`` (a short text) and ``"basis"`` (the best basis at hand, the rows the
     interior point named, or ``None``) for the caller's fallback (:mod:`.dense_path`).
+    ``accept``: a callable given the interior point's answer (as with ``interior=True``) before
+    any crossover; what it returns, if not ``None``, is the answer (with tableau ``None``).  The
+    Chebyshev centre (:func:`~.engine._interior_centre`) needs no vertex, and on a 2000-crack
+    network (issue 26, ``rng=77``) its crossover completed a basis of 2 strongly active rows by
+    a dense 1999 x 3999 ``linprog`` (:func:`~.ipm.complete_basis`) that ran for minutes.
     """
     R, n = A.shape
     rn = np.linalg.norm(A, axis=1)
@@ -73,6 +78,10 @@ def solve_max(A, b, e, *, max_iter=80, interior=False, why=None):
     if status == "failed":
         why.update(reason="interior point failed (unbounded, infeasible or stalled)", basis=None)
         return None, None
+    if accept is not None:
+        got = accept(DenseAnswer("interior", x, z / rn, np.zeros(0, int), it, (np.nan,) * 4))
+        if got is not None:
+            return got, None
     ans, tab = _crossover(A, b, e, As, s, z, it)
     if ans is None:
         why.update(reason="crossover from the interior point not certified",

@@ -269,9 +269,12 @@ def _chebyshev(cs: ConstraintSet, lam: float, solver: str):
     cap = 1e6 * max(1.0, np.abs(b).max(initial=0.0) / max(norms.min(initial=1.0), 1e-300))
     if solver == "auto":
         top = np.r_[np.zeros(n), 1.0]
-        ans, _ = dense_lp.solve_max(np.vstack([rows, top]), np.r_[b, cap], top, interior=True)
-        if ans is not None and ans.status == "interior":
-            ans = _interior_centre(cs.G, norms, b, cap, ans)
+        # the interior point's centre first (certified by its multipliers), the crossover to a
+        # vertex only when that is refused (issue 26: minutes at N = 2000, see solve_max)
+        ans, _ = dense_lp.solve_max(np.vstack([rows, top]), np.r_[b, cap], top, interior=True,
+                                    accept=lambda a: _interior_centre(cs.G, norms, b, cap, a))
+        if ans is not None and ans.status != "optimal":
+            ans = None
         if ans is not None:
             if ans.x[-1] < 0:
                 return np.zeros(0), -np.inf

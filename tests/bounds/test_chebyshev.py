@@ -98,3 +98,31 @@ def test_condensed_fe_strip_takes_the_dense_path(monkeypatch):
     assert y.min() >= -1e-9 * ys
     assert np.abs(cs.G.T @ y).max() <= 1e-9 * np.abs(cs.G).max() * ys
     assert cs.c @ y / (-(cs.m @ y)) == pytest.approx(b.lam2, rel=1e-8)
+
+
+@pytest.mark.parametrize("n,seed", [(30, 5), (80, 6)])
+def test_the_certified_interior_centre_needs_no_crossover(n, seed, monkeypatch):
+    """Issue 26: on a 2000-crack network (``rng=77``) the centre LP's crossover completed a
+    basis of 2 strongly active rows by a dense 1999 x 3999 ``linprog`` for minutes, after the
+    bounds were done.  The interior point's centre is now tried first: no crossover when its
+    multipliers certify it, and the radius is HiGHS's.  Where it is refused, the crossover runs
+    as before (and the centre is a vertex, again HiGHS's radius)."""
+    system, load = random_problem(n, seed)
+    cs = sd.bounds.extreme_constraints(system, load)
+    lam = 0.5 * sd.shakedown_bounds(system, load, only=("lam2",)).lam2
+    _, r_h = sd.bounds.chebyshev_centre(cs, lam, solver="highs")
+    calls = []
+    real = dense_lp._crossover
+
+    def counted(*a):
+        calls.append(1)
+        return real(*a)
+
+    monkeypatch.setattr(dense_lp, "_crossover", counted)
+    v, r = sd.bounds.chebyshev_centre(cs, lam)
+    assert not calls
+    assert r == pytest.approx(r_h, rel=engine.CENTRE_RTOL) and _ball_inside(cs, lam, v, r)
+    monkeypatch.setattr(engine, "_interior_centre", lambda *a: None)
+    v, r = sd.bounds.chebyshev_centre(cs, lam)
+    assert len(calls) == 1
+    assert r == pytest.approx(r_h, rel=1e-9) and _ball_inside(cs, lam, v, r)
