@@ -76,5 +76,6 @@ html_theme_options = {
     "show_toc_level": 2,
     "icon_links": [],
 }
-html_static_path = []
+html_static_path = ["_static"]
+html_css_files = ["wide_math.css"]  # wide display equations scroll instead of being cut off
 html_last_updated_fmt = None
