@@ -44,10 +44,10 @@ from .highs_path import solve_highs
 from .lp import INF, ReusableLP
 from .outcome import intervals_option as _intervals_option
 from .provenance import StageLog
+from .quantities import parse_only
 from .result import LAM_RTOL, ShakedownBounds
 
 #: What ``only=`` may name.
-QUANTITIES = ("lam1", "lam2", "lam_adj", "lam_separation")
 
 
 def shakedown_bounds(
@@ -159,7 +159,7 @@ def shakedown_bounds(
     if lam is not None:
         lam = _check_lam(lam)
     if only is not None:
-        intervals, adjacency, separation = _only(only)
+        intervals, adjacency, separation = parse_only(only)
     intervals = _intervals_option(intervals)
     sc = Scales.of(cs)
     ch = sc.nondimensional(cs)
@@ -224,21 +224,6 @@ def shakedown_bounds(
         constraints=cs,
         stages=tuple(out.stages),
     )
-
-
-def _only(only):
-    if isinstance(only, str):
-        only = (only,)
-    try:
-        wanted = set(only)
-    except TypeError as exc:
-        raise InputError(f"only must be a list of names from {QUANTITIES}; got {only!r}") from exc
-    bad = sorted(str(w) for w in wanted if w not in QUANTITIES)
-    if bad:
-        raise InputError(
-            f"only: unknown quantity {bad[0]!r}; choose from {', '.join(QUANTITIES)}")
-    return ("lam1" if "lam1" in wanted else False), "lam_adj" in wanted, \
-        "lam_separation" in wanted
 
 
 def chebyshev_centre(cs: ConstraintSet, lam: float, *, solver: str = "auto"):

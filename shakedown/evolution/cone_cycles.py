@@ -40,7 +40,7 @@ from ..model.validation import check_count, check_load_factor, check_same_nodes
 from .anderson import _anderson
 from .cone_step import ConeStepSolver
 from .cone_tables import table_3d
-from .cycle_results import SHAKEDOWN_FACTOR, CycleRun, _energy
+from .cycle_results import SHAKEDOWN_FACTOR, CycleRun, _energy, _outcome
 from .events import CycleRecord
 from .step_types import SEPARATED
 
@@ -274,20 +274,10 @@ def _finish_3d(system, solver, load, lam, n_steps, tol, F, records, history, per
         K = np.asarray(system.to_dense().K if getattr(system, "is_sparse", False) else system.K)
         diag = np.concatenate([np.repeat(d.kT, 2), d.kN])
         energy = _energy(flat, _FlatLoad(load), lam, diag, F, tol, K=K, implicit=True)
-        status = "periodic"
-        msg = (f"periodic with period {period} T after {n_cycles} period(s); "
-               + ("shook down" if shook else f"steady W = {steady_W:.6g} per period"))
     else:
         stuck, steady_W, shook, energy = np.zeros(0, int), float("nan"), False, None
-        if ok:
-            status = "not_converged"
-            msg = (f"no steady orbit within {max_cycles} period(s); last state change "
-                   f"{change[-1]:.3g} > tol = {tol:g}" if change else "no period simulated")
-        else:
-            status, msg = "step_failed", f"stopped: {fail_msg}"
-    bad = {k: m for k, m in statuses.items() if k != "unique"}
-    if bad:
-        msg += "; step statuses " + ", ".join(f"{k}: {m}" for k, m in sorted(bad.items()))
+    status, msg = _outcome(period, n_cycles, shook, steady_W, ok, fail_msg, max_cycles, change,
+                           tol, statuses)
     tot = {k: solver.totals[k] - tot0.get(k, 0) for k in solver.totals}
     stats = dict(n_steps=tot["steps"], n_events=0, rate_solves=0,
                  active_set_iterations=tot["iterations"], factorizations=tot["iterations"],

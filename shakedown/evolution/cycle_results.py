@@ -276,6 +276,25 @@ def _energy(records, load, lam, D, F, tol, K=None, implicit=False):
     return EnergyIdentity(W, integral, W - integral, rel, losses, ddiff, abs(ddiff) / scale)
 
 
+def _outcome(period, n_cycles, shook, steady_W, ok, fail_msg, max_cycles, change, tol,
+             step_statuses):
+    """A cycle run's ``(status, message)`` (2-D and 3-D drivers alike)."""
+    if period:
+        status = "periodic"
+        msg = (f"periodic with period {period} T after {n_cycles} period(s); "
+               + ("shook down" if shook else f"steady W = {steady_W:.6g} per period"))
+    elif ok:
+        status = "not_converged"
+        msg = (f"no steady orbit within {max_cycles} period(s); last state change "
+               f"{change[-1]:.3g} > tol = {tol:g}" if change else "no period simulated")
+    else:
+        status, msg = "step_failed", f"stopped: {fail_msg}"
+    bad = {k: m for k, m in step_statuses.items() if k != "unique"}
+    if bad:
+        msg += "; step statuses " + ", ".join(f"{k}: {m}" for k, m in sorted(bad.items()))
+    return status, msg
+
+
 def _finish(system, solver, load, lam, method, n_steps, tol, F, dtol, records, history, period,
             W_list, change, starts_v, starts_w, v, w, ok, fail_msg, note, step_statuses,
             max_res, totals0, t_start, integrator, max_cycles):
@@ -294,20 +313,10 @@ def _finish(system, solver, load, lam, method, n_steps, tol, F, dtol, records, h
         shook = not bool(np.any(slipped))
         energy = _energy(orbit, load, lam, solver.diag, F, tol, K=system.K,
                          implicit=(method == "implicit"))
-        status = "periodic"
-        msg = (f"periodic with period {period} T after {n_cycles} period(s); "
-               + ("shook down" if shook else f"steady W = {steady_W:.6g} per period"))
     else:
         stuck, steady_W, shook, energy = np.zeros(0, int), float("nan"), False, None
-        if ok:
-            status = "not_converged"
-            msg = (f"no steady orbit within {max_cycles} period(s); last state change "
-                   f"{change[-1]:.3g} > tol = {tol:g}" if change else "no period simulated")
-        else:
-            status, msg = "step_failed", f"stopped: {fail_msg}"
-    bad = {k: m for k, m in step_statuses.items() if k not in ("unique",)}
-    if bad:
-        msg += "; step statuses " + ", ".join(f"{k}: {m}" for k, m in sorted(bad.items()))
+    status, msg = _outcome(period, n_cycles, shook, steady_W, ok, fail_msg, max_cycles, change,
+                           tol, step_statuses)
     tot = {k: solver.totals[k] - totals0.get(k, 0) for k in solver.totals}
     stats = dict(
         n_steps=int(integrator.n_events if integrator else tot["steps"]),

@@ -13,6 +13,7 @@ import numpy as np
 
 from ...model import citations
 from ...model.errors import InputError
+from ..quantities import parse_only
 from .certify import ConeCertificate, check_safe_state
 from .data import cone_data
 from .melan import BRACKET_RTOL, melan_lam2
@@ -20,7 +21,6 @@ from .result import ConeBounds
 from .rounds import check_solver
 
 #: What ``only=`` may name in 3-D.
-QUANTITIES_3D = ("lam1", "lam2", "lam_adj", "lam_separation")
 
 
 def cone_bounds(system, load, *, lam=None, only=None, facets=None, intervals="lam1",
@@ -63,7 +63,7 @@ def cone_bounds(system, load, *, lam=None, only=None, facets=None, intervals="la
     citations.register("melan1936", "klarbring2007")
     t0 = time.perf_counter()
     if only is not None:
-        intervals, adjacency = _only(only)
+        intervals, adjacency, _ = parse_only(only)
     check_solver(solver)
     data = cone_data(system, load)
     n = data.n_nodes
@@ -119,17 +119,3 @@ def cone_bounds(system, load, *, lam=None, only=None, facets=None, intervals="la
                              intervals=intervals, adjacency=adjacency)
     object.__setattr__(res, "solve_time", time.perf_counter() - t0)
     return res
-
-
-def _only(only):
-    if isinstance(only, str):
-        only = (only,)
-    try:
-        wanted = set(only)
-    except TypeError as exc:
-        raise InputError(f"only must be a list of names from {QUANTITIES_3D}; got {only!r}") from exc
-    bad = sorted(str(w) for w in wanted if w not in QUANTITIES_3D)
-    if bad:
-        raise InputError(f"only: unknown quantity {bad[0]!r}; choose from "
-                         f"{', '.join(QUANTITIES_3D)}")
-    return ("lam1" if "lam1" in wanted else False), "lam_adj" in wanted
