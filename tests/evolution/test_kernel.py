@@ -30,18 +30,38 @@ def coupled(rng, n, fraction=0.5):
     return s.with_friction(fraction * min(s.critical_friction().value, 2.0))
 
 
-def assert_same_run(a, b, s):
+def assert_same_run(a, b, s, threshold_tol=None):
+    """``a`` and ``b`` are the same run.  With ``threshold_tol`` (the runs' ``tol``), one more
+    period in one run is accepted where the other stopped with its state change within round-off
+    of the threshold: the longer run's change there lies within ``10 tol`` (the two step paths
+    differ by round-off; the steady results must still agree)."""
     assert a.status == b.status
-    assert a.n_cycles == b.n_cycles and a.period == b.period
+    if threshold_tol is not None and abs(a.n_cycles - b.n_cycles) == 1:
+        short, long_ = sorted((a, b), key=lambda r: r.n_cycles)
+        assert long_.state_change[short.n_cycles - 1] <= 10 * threshold_tol
+        m = short.n_cycles
+        W = a.force_scale ** 2 / s.A.diagonal().min()
+        np.testing.assert_allclose(long_.dissipation[:m], short.dissipation, rtol=0, atol=1e-9 * W)
+        np.testing.assert_allclose(long_.steady_dissipation, short.steady_dissipation, rtol=0,
+                                   atol=1e-9 * W)
+        a, b = long_, short
+    else:
+        assert a.n_cycles == b.n_cycles
+    assert a.period == b.period
     W = a.force_scale ** 2 / s.A.diagonal().min()
-    np.testing.assert_allclose(a.dissipation, b.dissipation, rtol=0, atol=1e-9 * W)
+    if a.n_cycles == b.n_cycles:
+        np.testing.assert_allclose(a.dissipation, b.dissipation, rtol=0, atol=1e-9 * W)
     tol = 10 * FEAS_TOL * a.force_scale / s.A.diagonal().min()
     np.testing.assert_allclose(a.final_slip, b.final_slip, rtol=0, atol=tol)
     np.testing.assert_allclose(a.final_gap, b.final_gap, rtol=0, atol=tol)
     if a.final_active_sets is not None:
         np.testing.assert_array_equal(a.final_active_sets, b.final_active_sets)
     np.testing.assert_array_equal(a.stuck_nodes, b.stuck_nodes)
-    assert a.step_statuses == b.step_statuses
+    if a.n_cycles == b.n_cycles:
+        assert a.step_statuses == b.step_statuses
+    else:  # the one more period's steps, with the same statuses
+        assert set(a.step_statuses) == set(b.step_statuses)
+        assert sum(a.step_statuses.values()) - sum(b.step_statuses.values()) == a.steps_per_cycle
 
 
 @pytest.mark.parametrize("seed", range(6))
@@ -288,7 +308,26 @@ def test_kernel_equals_python_property(seed, n, lam, fraction, p_mean, harmonic_
     kw = dict(steps_per_cycle=16, max_cycles=40, tol=1e-10)
     a = sd.solve_cycles(s, load, lam, solver=StepSolver(s), **kw)
     b = sd.solve_cycles(s, load, lam, solver=StepSolver(s, kernel=False), **kw)
-    assert_same_run(a, b, s)
+    assert_same_run(a, b, s, threshold_tol=kw["tol"])
+
+
+def test_threshold_tolerance_accepts_round_off_at_the_stopping_test_only(harmonic_load):
+    """Seed 112 (found by hypothesis in CI): the compiled run stops one period after the Python
+    one (state change 1.7e-10 against tol = 1e-10 there), with the same steady results; the
+    strict comparison refuses it, the threshold-aware one accepts it, and still refuses a
+    period more than one."""
+    rng = np.random.default_rng(112)
+    s = coupled(rng, 9, fraction=0.4375)
+    load = harmonic_load(rng, s, amp=3.0, p_mean=1.2109375, p_amp=0.8)
+    kw = dict(steps_per_cycle=16, max_cycles=40, tol=1e-10)
+    a = sd.solve_cycles(s, load, 1.203125, solver=StepSolver(s), **kw)
+    b = sd.solve_cycles(s, load, 1.203125, solver=StepSolver(s, kernel=False), **kw)
+    assert_same_run(a, b, s, threshold_tol=kw["tol"])
+    if a.n_cycles != b.n_cycles:
+        with pytest.raises(AssertionError):
+            assert_same_run(a, b, s)
+        with pytest.raises(AssertionError):  # a tighter threshold: the change is not round-off
+            assert_same_run(a, b, s, threshold_tol=1e-12)
 
 
 def test_ill_conditioned_assignments_fall_back_to_lu(harmonic_load):
