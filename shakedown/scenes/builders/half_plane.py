@@ -44,6 +44,19 @@ def _check(table: dict, allowed: dict, name: str):
             raise SceneError(f"[{name}] key {key!r} = {value!r} must be a {want}")
 
 
+def normal_load(load_table: dict, noun: str):
+    """``(P0, P1, phase [rad])`` of a contact scene's ``[load]`` table (half-plane and
+    half-space); ``noun`` names ``P0`` in the message when it is missing."""
+    if "phase" in load_table and "phase_deg" in load_table:
+        raise SceneError("[load] give 'phase' (radians) or 'phase_deg', not both")
+    if "P0" not in load_table:
+        raise SceneError(f"[load] key 'P0' ({noun} > 0) is required")
+    P0 = float(load_table["P0"])
+    P1 = float(load_table.get("P1", 0.0))
+    phase = float(load_table.get("phase", np.deg2rad(load_table.get("phase_deg", 0.0))))
+    return P0, P1, phase
+
+
 def build_from_scene(model_table: dict, load_table: dict, base_dir=None):
     """``(DiscreteSystem, LoadCycle, HalfPlaneModel)`` from a scene's ``[model]``/``[load]`` tables.
 
@@ -55,14 +68,8 @@ def build_from_scene(model_table: dict, load_table: dict, base_dir=None):
     model_table = {k: v for k, v in model_table.items() if k != "kind"}
     _check(model_table, MODEL_KEYS, "model")
     _check(load_table, LOAD_KEYS, "load")
-    if "phase" in load_table and "phase_deg" in load_table:
-        raise SceneError("[load] give 'phase' (radians) or 'phase_deg', not both")
-    if "P0" not in load_table:
-        raise SceneError("[load] key 'P0' (mean normal load > 0) is required")
-    P0 = float(load_table["P0"])
-    P1 = float(load_table.get("P1", 0.0))
+    P0, P1, phase = normal_load(load_table, "mean normal load")
     Q1 = float(load_table.get("Q1", 0.0))
-    phase = float(load_table.get("phase", np.deg2rad(load_table.get("phase_deg", 0.0))))
     profile = model_table.get("profile", "hertz")
     mats = ((model_table.get("E1", 1.0), model_table.get("nu1", 0.3)),
             (model_table.get("E2", 1.0), model_table.get("nu2", 0.3)))

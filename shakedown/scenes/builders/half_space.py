@@ -19,10 +19,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
-
 from ...model.errors import InputError, SceneError
 from .half_plane import _check as _check_kind
+from .half_plane import normal_load
 
 MODEL_KEYS = {
     "profile": (str,), "radius": (int, float), "radii": (list,), "flat_radius": (int, float),
@@ -56,13 +55,7 @@ def build_from_scene(model_table: dict, load_table: dict, base_dir=None):
     model_table = {k: v for k, v in model_table.items() if k != "kind"}
     _check(model_table, MODEL_KEYS, "model")
     _check(load_table, LOAD_KEYS, "load")
-    if "phase" in load_table and "phase_deg" in load_table:
-        raise SceneError("[load] give 'phase' (radians) or 'phase_deg', not both")
-    if "P0" not in load_table:
-        raise SceneError("[load] key 'P0' (mean normal force > 0) is required")
-    P0 = float(load_table["P0"])
-    P1 = float(load_table.get("P1", 0.0))
-    phase = float(load_table.get("phase", np.deg2rad(load_table.get("phase_deg", 0.0))))
+    P0, P1, phase = normal_load(load_table, "mean normal force")
     profile = model_table.get("profile", "sphere")
     mats = ((model_table.get("E1", 1.0), model_table.get("nu1", 0.3)),
             (model_table.get("E2", 1.0), model_table.get("nu2", 0.3)))
