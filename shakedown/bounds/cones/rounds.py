@@ -3,8 +3,9 @@
 :func:`solve_round` solves the SOCP on the current cuts with the dense interior point
 (:mod:`.dense_ipm`, coupled systems) and accepts its answer only when it passes its own
 conditions: the state satisfies every cut (to :data:`PRIMAL_TOL` of the force scale), the
-multipliers lie in their cones and are stationary (:func:`.socp.dual_bound`, to the engine's
-``DUAL_TOL``) and the bound they prove is not below the state's value (weak duality); the
+multipliers lie in their cones and are stationary to the engine's ``DUAL_TOL`` (a quality
+screen: the bound :func:`.socp.dual_bound` computes from them is valid whatever their
+residuals, :mod:`.dual`) and that bound is not below the state's value (weak duality); the
 cutting-plane loop re-solves by Clarabel a round whose gap is too wide to close the bracket
 (:func:`.melan.melan_lam2`).  Otherwise Clarabel solves the
 same SOCP (:func:`.socp.solve_cuts`) and the reason is recorded.  :class:`SocpLog` keeps which
