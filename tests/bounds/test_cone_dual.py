@@ -10,7 +10,7 @@ estimate; and where no bound can be proven (``||E||_2 >= 1`` with a residual lef
 ``inf``, not a number.
 """
 
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 import pytest
@@ -41,7 +41,7 @@ def random_load(n, seed):
         p_cos=0.2 * n * rng.normal(size=n), p_sin=0.2 * n * rng.normal(size=n))
 
 
-@lru_cache(maxsize=None)
+@cache
 def solved(seed):
     """A coupled 4-node system bracketed to 1e-9 by Clarabel: ``(data, bounds)``."""
     s, load = random_3d(4, 20 + seed), random_load(4, 30 + seed)
