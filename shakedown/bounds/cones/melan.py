@@ -35,6 +35,9 @@ from .socp import LAM_CAP, dual_bound, solve_cuts
 
 #: Default relative width of the certified bracket ``[lam_lo, lam_hi]``.
 BRACKET_RTOL = 1e-6
+#: Below this ``rtol`` every dense round solves its late Newton systems in the split form
+#: (:mod:`.ipm_split`): the normal equations stop at a gap of ``~ 1e-8 .. 1e-6``.
+SPLIT_RTOL = 1e-7
 #: A node is cut again when its violation exceeds this (units of the force scale).
 CUT_TOL = 1e-12
 #: Largest dual residual (cone membership, stationarity; relative) of a dense answer accepted
@@ -113,6 +116,7 @@ def melan_lam2(data, *, rtol=BRACKET_RTOL, max_rounds=60, cuts=None, solver="aut
     out = MelanOutcome("bounded", 0.0, np.inf, u0, tau0, u0, 0.0, nodes, times, np.zeros((0, 3)),
                        u0=u0, tau0=tau0, log=log)
     dense = solver == "dense"
+    split = rtol < SPLIT_RTOL
     start = (u0, 0.0)
     if not tau0 > 0:
         out.status = "infeasible"
@@ -124,7 +128,7 @@ def melan_lam2(data, *, rtol=BRACKET_RTOL, max_rounds=60, cuts=None, solver="aut
     worst = {"cone": 0.0, "stationarity": 0.0, "sign": 0.0}
     for rnd in range(max_rounds):
         ans, bound = solve_round(data, nodes, times, solver=solver, start=start,
-                                 dual_tol=DUAL_TOL, log=log, fail=fail)
+                                 dual_tol=DUAL_TOL, log=log, fail=fail, split=split)
         out.rounds = rnd + 1
         out.iterations += ans.iterations
         if ans.status == "unbounded":
@@ -147,8 +151,9 @@ def melan_lam2(data, *, rtol=BRACKET_RTOL, max_rounds=60, cuts=None, solver="aut
         uc, lc = theta * ans.u + (1 - theta) * u0, theta * ans.lam
         if bound is not None and _too_wide(out, hi, lc, ans.lam, rtol):
             # the cuts are right but the dense answer's gap (~ cuts x mu) is too wide to close
-            # the bracket: its active cuts alone (a relaxation too) by the dense path, and if
-            # that is still too wide, the whole round by Clarabel
+            # the bracket: its active cuts alone (a relaxation too) by the dense path with the
+            # split Newton systems (.ipm_split), and if that is still too wide, the whole
+            # round by Clarabel
             cert, ans2 = _tighten(data, nodes, times, ans, (0.9 * uc + 0.1 * u0, 0.9 * lc), log,
                                   fail)
             out.iterations += ans2.iterations if ans2 is not None else 0
@@ -216,7 +221,7 @@ def _tighten(data, nodes, times, ans, start, log, fail):
     if sn.size >= nodes.size:
         return cert, None
     a2, b2 = solve_round(data, sn, st, solver="dense", start=start, dual_tol=DUAL_TOL, log=log,
-                         fail=fail)
+                         fail=fail, split=True)
     if a2.status != "optimal":
         return cert, a2
     h2, r2 = dual_bound(data, sn, st, a2.z, a2.y_cap) if b2 is None else b2

@@ -104,7 +104,7 @@ def check_round(data, nodes, times, ans, *, dual_tol):
     return None, (hi, res)
 
 
-def solve_round(data, nodes, times, *, solver, start, dual_tol, log, fail=None):
+def solve_round(data, nodes, times, *, solver, start, dual_tol, log, fail=None, split=False):
     """The relaxation on the cuts ``(nodes, times)`` (module docstring).
 
     Parameters
@@ -114,6 +114,9 @@ def solve_round(data, nodes, times, *, solver, start, dual_tol, log, fail=None):
     log : SocpLog
     fail : callable, optional
         Test hook: applied to the dense answer before it is checked (to force the fallback).
+    split : bool
+        The late Newton systems in the split augmented form (:mod:`.ipm_split`): for rounds
+        that must prove a bracket tighter than the normal equations allow.
 
     Returns
     -------
@@ -123,7 +126,8 @@ def solve_round(data, nodes, times, *, solver, start, dual_tol, log, fail=None):
     """
     if solver == "dense" and data.coupled:
         a1, b1 = data.periodic(times, nodes)
-        ans = solve_dense(data.E, nodes, a1, b1, data.a0, data.b0, u0=start[0], lam0=start[1])
+        ans = solve_dense(data.E, nodes, a1, b1, data.a0, data.b0, u0=start[0], lam0=start[1],
+                          split=split)
         if fail is not None:
             ans = fail(ans)
         why, bound = check_round(data, nodes, times, ans, dual_tol=dual_tol)
