@@ -42,8 +42,10 @@ SPLIT_RTOL = 1e-7
 CUT_TOL = 1e-12
 #: Largest dual residual (cone membership, stationarity; relative) of a dense answer accepted
 #: without a Clarabel re-solve.  A quality screen only: the bound of any multipliers is valid
-#: (:mod:`.dual`), larger residuals just make it looser.
-DUAL_TOL = 1e-6
+#: (:mod:`.dual`, which also polishes them), larger residuals just make it looser, and a bound
+#: too loose to close the bracket is re-solved anyway (``_too_wide``).  It was ``1e-6`` while
+#: the bound relied on the residuals being small.
+DUAL_TOL = 1e-4
 
 
 @dataclass
