@@ -36,16 +36,20 @@ from .socp import LAM_CAP, dual_bound, solve_cuts
 #: Default relative width of the certified bracket ``[lam_lo, lam_hi]``.
 BRACKET_RTOL = 1e-6
 #: Below this ``rtol`` every dense round solves its late Newton systems in the split form
-#: (:mod:`.ipm_split`): the normal equations stop at a gap of ``~ 1e-8 .. 1e-6``.
+#: (:mod:`.ipm_split`): the normal equations stop at a gap of ``~ 1e-8 .. 1e-6``.  Not above
+#: it: its LU of ``2N + 1 + k`` (``k`` split cones) is dear at large N (measured at N = 500,
+#: rtol = 1e-6, seed 2 of the benchmark: 89 s of CPU with split re-solves and ``DUAL_TOL =
+#: 1e-4``, against 27 s with neither).
 SPLIT_RTOL = 1e-7
 #: A node is cut again when its violation exceeds this (units of the force scale).
 CUT_TOL = 1e-12
 #: Largest dual residual (cone membership, stationarity; relative) of a dense answer accepted
 #: without a Clarabel re-solve.  A quality screen only: the bound of any multipliers is valid
 #: (:mod:`.dual`, which also polishes them), larger residuals just make it looser, and a bound
-#: too loose to close the bracket is re-solved anyway (``_too_wide``).  It was ``1e-6`` while
-#: the bound relied on the residuals being small.
-DUAL_TOL = 1e-4
+#: too loose to close the bracket is re-solved anyway (``_too_wide``).  It was ``1e-6`` when
+#: the bound relied on the residuals being small, and is kept: a larger value lets rounds
+#: through whose bound is then too loose, and their re-solve costs more than Clarabel's.
+DUAL_TOL = 1e-6
 
 
 @dataclass
@@ -153,11 +157,11 @@ def melan_lam2(data, *, rtol=BRACKET_RTOL, max_rounds=60, cuts=None, solver="aut
         uc, lc = theta * ans.u + (1 - theta) * u0, theta * ans.lam
         if bound is not None and _too_wide(out, hi, lc, ans.lam, rtol):
             # the cuts are right but the dense answer's gap (~ cuts x mu) is too wide to close
-            # the bracket: its active cuts alone (a relaxation too) by the dense path with the
-            # split Newton systems (.ipm_split), and if that is still too wide, the whole
-            # round by Clarabel
+            # the bracket: its active cuts alone (a relaxation too) by the dense path (split
+            # Newton systems, .ipm_split, when rtol < SPLIT_RTOL), and if that is still too
+            # wide, the whole round by Clarabel
             cert, ans2 = _tighten(data, nodes, times, ans, (0.9 * uc + 0.1 * u0, 0.9 * lc), log,
-                                  fail)
+                                  fail, split)
             out.iterations += ans2.iterations if ans2 is not None else 0
             if _too_wide(out, cert[0], lc, ans.lam, rtol):
                 log.record("clarabel", "dense interior point: gap too wide to close the bracket "
@@ -213,7 +217,7 @@ def _too_wide(out, hi, lc, lam, rtol):
     return lo >= (1 - 0.5 * rtol) * lam and up - lo > rtol * up
 
 
-def _tighten(data, nodes, times, ans, start, log, fail):
+def _tighten(data, nodes, times, ans, start, log, fail, split):
     """The bound of the relaxation on the active cuts of ``ans`` alone (fewer cones: a smaller
     gap at the interior point's accuracy); ``(cert, answer)`` with ``cert = (hi, residuals, z,
     nodes, times)``, the better (smaller, valid) of the two bounds."""
@@ -223,7 +227,7 @@ def _tighten(data, nodes, times, ans, start, log, fail):
     if sn.size >= nodes.size:
         return cert, None
     a2, b2 = solve_round(data, sn, st, solver="dense", start=start, dual_tol=DUAL_TOL, log=log,
-                         fail=fail, split=True)
+                         fail=fail, split=split)
     if a2.status != "optimal":
         return cert, a2
     h2, r2 = dual_bound(data, sn, st, a2.z, a2.y_cap) if b2 is None else b2
