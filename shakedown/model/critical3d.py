@@ -42,6 +42,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse.linalg as spla
+from scipy.linalg.blas import dsyrk
 
 from .critical import CriticalFriction
 from .verified import EPS, certified_lower_eig, certified_upper_eig, gamma
@@ -101,7 +102,7 @@ def sufficient_factor_3d(A, B, C, friction_xy):
 #: ``F C F``).  The estimate is then proven (or refused) by a Cholesky factorisation.
 DENSE_EIG_MAX = 400
 #: Relative shifts below the estimate tried by the proof (of the matrix's largest diagonal).
-SLACK = (1e-14, 1e-11, 1e-8, 1e-5, 1e-3)
+SLACK = (1e-14, 1e-11, 1e-10, 1e-9, 1e-8, 1e-6, 1e-4)
 
 
 def schur_lower_eig(A, B, C) -> float:
@@ -127,18 +128,25 @@ def schur_lower_eig(A, B, C) -> float:
     except (np.linalg.LinAlgError, ValueError):
         return -np.inf
     Y = sla.solve_triangular(L, B.T, lower=True, check_finite=False)  # (N, 2N)
-    T = np.array(A, order="F", copy=True)
-    T -= Y.T @ Y
-    if n2 <= DENSE_EIG_MAX:
-        est = float(sla.eigvalsh(T, subset_by_index=[0, 0], check_finite=False)[0])
+    T = dsyrk(-1.0, Y, beta=1.0, c=np.array(A, order="F", copy=True), trans=1, lower=0,
+              overwrite_c=1)  # A - Y^T Y, upper triangle
+    if n2 <= DENSE_EIG_MAX:  # only the upper triangle of T is read from here on
+        est = float(sla.eigvalsh(T, lower=False, subset_by_index=[0, 0], check_finite=False)[0])
     else:
         try:
             R = sla.cholesky(T, lower=False, check_finite=False)
         except (np.linalg.LinAlgError, ValueError):
             return -np.inf  # T is not positive definite: no positive bound to prove
-        op = spla.LinearOperator((n2, n2), dtype=float, matvec=lambda x: sla.cho_solve(
-            (R, False), x, check_finite=False))
-        top = float(spla.eigsh(op, k=1, which="LA", tol=1e-10, return_eigenvectors=False)[0])
+
+        def inv(x):  # T^-1 x = R^-1 R^-T x
+            y = sla.solve_triangular(R, x, trans="T", check_finite=False)
+            return sla.solve_triangular(R, y, check_finite=False)
+
+        op = spla.LinearOperator((n2, n2), dtype=float, matvec=inv)
+        # tol 1e-6 on the Ritz vector gives the value to ~1e-11 (its error is quadratic);
+        # the proof below tolerates any estimate error up to its slack
+        top = float(spla.eigsh(op, k=1, which="LA", tol=1e-6, v0=np.ones(n2),
+                               return_eigenvectors=False)[0])
         est = 1.0 / top
     lb = certified_lower_eig(T, est, slack=SLACK)  # T - sigma I by Cholesky: T's own proof
     return float(lb - m) if np.isfinite(lb) else -np.inf
