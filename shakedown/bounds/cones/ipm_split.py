@@ -37,8 +37,10 @@ SPLIT_W0SQ = 1e2
 SPLIT_LATE = 1e5
 #: Largest augmented matrix (``2N + 1 + k``): beyond it only the cones with the largest
 #: rank-one parts ``eta^-2 w0^2`` are split (near the optimum of a tight bracket almost every
-#: cut is active, ``k ~ M``; measured at N = 200, rtol = 1e-9 without a cap: 104 s of CPU).
-SPLIT_MAX = 1500
+#: cut is active, ``k ~ M``).  Measured at N = 200, rtol = 1e-9 (benchmarks/
+#: RESULTS_3d_bounds.md): 4000 closes the bracket to 2e-11 with no fallback in ~100 s of CPU
+#: (peak 486 MB); 1500 takes ~30 s but leaves 2e-9 .. 1e-8 and 2-4 Clarabel fallbacks.
+SPLIT_MAX = 4000
 _J = np.array([1.0, -1.0, -1.0])
 
 
