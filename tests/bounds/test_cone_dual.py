@@ -136,9 +136,9 @@ def test_coupling_norm_is_proven_and_refuses_a_wrong_estimate():
 
 
 def test_no_bound_without_a_state_bound():
-    """||E||_2 >= 1 (a large friction coefficient): a residual left in the multipliers cannot
-    be charged against the state, so the bound is inf; exact multipliers of an uncoupled
-    system (E = 0, r = 0 after the cone projection) still prove their value."""
+    """With a state bound that does not hold (e = ||E||_2 >= 1 claimed) a residual left in the
+    multipliers cannot be charged against the state, so the bound is inf, not a number; with
+    the proven e the same multipliers prove a bound above lam2."""
     d, b = solved(2)
     c = b.certificate
     z = c.multipliers * (1 + 1e-3 * np.random.default_rng(0).normal(size=(c.multipliers.shape[0], 1)))
