@@ -205,17 +205,94 @@ def test_dense_path_does_not_depend_on_units(force, stiff, amp):
     np.testing.assert_allclose(b.lam2_upper * amp, ref.lam2_upper, rtol=1e-7)
 
 
-def test_a_tight_bracket_is_reached_through_the_fallback_and_agrees_with_clarabel():
-    """rtol = 1e-8 is below what the dense interior point's multipliers can close: the rounds
-    that would close it are re-solved (active cuts, then Clarabel), and the answer agrees with
-    the Clarabel path to the brackets' width."""
+@pytest.mark.parametrize("rtol", [1e-8, 1e-9])
+def test_a_tight_bracket_is_reached_by_the_dense_path_alone_and_agrees_with_clarabel(rtol):
+    """rtol = 1e-8 and 1e-9 are below what the normal equations' multipliers can close (gap
+    ~1e-8..1e-6); the split Newton systems (shakedown.bounds.cones.ipm_split) close them with
+    no Clarabel fallback, and the brackets overlap the Clarabel path's."""
     from shakedown.bounds.cones.engine import cone_bounds
 
     s, load = random_3d(8, 13), random_load(8, 14)
-    fast = cone_bounds(s, load, only=("lam2",), solver="dense", rtol=1e-8)
-    ref = cone_bounds(s, load, only=("lam2",), solver="clarabel", rtol=1e-8)
-    assert fast.status == "bounded" and fast.lam2_upper - fast.lam2_lower <= 1e-8 * fast.lam2_upper
+    fast = cone_bounds(s, load, only=("lam2",), solver="dense", rtol=rtol)
+    ref = cone_bounds(s, load, only=("lam2",), solver="clarabel", rtol=rtol)
+    assert fast.status == "bounded" and fast.lam2_upper - fast.lam2_lower <= rtol * fast.lam2_upper
+    assert fast.path == "dense" and not fast.fallbacks
     assert max(fast.lam2_lower, ref.lam2_lower) <= min(fast.lam2_upper, ref.lam2_upper)
-    np.testing.assert_allclose(fast.lam2, ref.lam2, rtol=3e-8)
+    np.testing.assert_allclose(fast.lam2, ref.lam2, rtol=3 * rtol)
     assert check_dual_bound(s, load, fast.certificate, fast.lam2_upper)[0]
     assert check_safe_state(s, load, fast.state_at_lam2, fast.lam2)[0]
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_split_newton_systems_reach_a_gap_the_normal_equations_cannot(seed):
+    """One relaxation (N = 12, 96 cuts): the normal equations stop at a relative gap between
+    the value and the proven bound of ~1e-8; the split augmented form reaches < 1e-10, with
+    Clarabel's value to 1e-10."""
+    n = 12
+    d = cone_data(random_3d(n, seed), random_load(n, 100 + seed))
+    nodes, times = initial_cuts(d, 8)
+    ref = solve_cuts(d, nodes, times)
+    u0, _ = margin_state(d, solver="dense", log=SocpLog())
+    a1, b1 = d.periodic(times, nodes)
+    gaps = {}
+    for split in (False, True):
+        ans = solve_dense(d.E, nodes, a1, b1, d.a0, d.b0, u0=u0, split=split, tol=1e-13)
+        hi, _ = dual_bound(d, nodes, times, ans.z, ans.y_cap)
+        gaps[split] = (hi - ans.lam) / ans.lam
+        assert hi >= ref.lam * (1 - 1e-12)  # a proven bound is never below the optimum
+    assert gaps[True] < 1e-10 < gaps[False]
+    np.testing.assert_allclose(ans.lam, ref.lam, rtol=1e-10)
+
+
+def test_split_solver_inverts_the_normal_matrix():
+    """The split augmented solve (N0 + U U^T) dx = r agrees with a direct solve of the normal
+    matrix G^T W^-2 G on a well-conditioned case (every cone split), and carries tau = U^T dx."""
+    import shakedown.bounds.cones.ipm_split as isp
+    from shakedown.bounds.cones.dense_ipm import _Cuts
+
+    rng = np.random.default_rng(3)
+    n, m = 5, 15
+    E = 0.2 * rng.normal(size=(n, 2 * n))
+    nodes = np.repeat(np.arange(n), 3)
+    G = _Cuts(E, nodes, rng.normal(size=(m, 2)), rng.normal(size=m), rng.normal(size=(n, 2)),
+              2 + rng.random(n), 1e6)
+    W, Winv, _ = _nt_scaling(interior(rng, m), interior(rng, m, 0.1))
+    Hm = np.einsum("mab,mcb->mac", Winv, Winv)
+    N = G.normal_matrix(Hm, 0.5)
+    N = np.triu(N) + np.triu(N, 1).T
+    old = isp.SPLIT_W0SQ
+    isp.SPLIT_W0SQ = 0.0
+    try:
+        sol = isp.SplitSolver(G, W, Hm, 0.5)
+    finally:
+        isp.SPLIT_W0SQ = old
+    assert sol.k == m
+    r = rng.normal(size=2 * n + 1)
+    dx, tau = sol.solve(r)
+    np.testing.assert_allclose(dx, np.linalg.solve(N, r), rtol=1e-9, atol=1e-12)
+    # each cone's scaling splits exactly into H0 + a a^T
+    H = sol.H0 + np.einsum("ma,mb->mab", sol.a, sol.a)
+    np.testing.assert_allclose(H, Hm, rtol=1e-10, atol=1e-12 * np.abs(Hm).max())
+    # a wrong right-hand side is not a solution (the check can fail)
+    assert not np.allclose(N @ sol.solve(r + 1.0)[0], r)
+
+
+@settings(max_examples=3, deadline=None)
+@given(force=st.floats(1e-6, 1e12), stiff=st.floats(1e-6, 1e12), amp=st.floats(1e-6, 1e12))
+def test_tight_dense_bracket_does_not_depend_on_units(force, stiff, amp):
+    """rtol = 1e-9 by the dense path: A, B, C scaled by one factor, the loads by others; the
+    certified brackets of the two unit systems overlap and lam2 agrees to the bracket width."""
+    from shakedown.bounds.cones.engine import cone_bounds
+
+    s, load = random_3d(5, 15), random_load(5, 16)
+    ref = cone_bounds(s, load, only=("lam2",), solver="dense", rtol=1e-9)
+    s2 = sd.DiscreteSystem(stiff * s.A, stiff * s.B, stiff * s.C, friction=s.friction, dim=3)
+    l2 = sd.LoadCycle.from_harmonics(
+        q0=force * load.q0, p0=force * load.p0, q_cos=force * amp * load.q_cos,
+        q_sin=force * amp * load.q_sin, p_cos=force * amp * load.p_cos,
+        p_sin=force * amp * load.p_sin)
+    b = cone_bounds(s2, l2, only=("lam2",), solver="dense", rtol=1e-9)
+    assert b.status == ref.status == "bounded" and b.path == "dense"
+    assert max(b.lam2_lower * amp, ref.lam2_lower) <= min(b.lam2_upper * amp, ref.lam2_upper) \
+        * (1 + 1e-12)
+    np.testing.assert_allclose(b.lam2 * amp, ref.lam2, rtol=2e-9)

@@ -6,8 +6,11 @@ Modules, in the order of the pipeline:
   coupling ``E = B^T A^-1 diag(f)``);
 * :mod:`.separation` -- every node's exact worst time (roots of a trigonometric polynomial);
 * :mod:`.socp` -- the relaxations on finite sets of cuts (Clarabel) and their dual bound;
+* :mod:`.dual` -- the upper bound proven by multipliers of any accuracy (cones projected,
+  residual polished and charged against an a-priori bound on the state);
 * :mod:`.dense_ipm` -- the same relaxations by a dense interior point on the ``2N + 1`` normal
-  equations (coupled systems; the default path);
+  equations (coupled systems; the default path), with :mod:`.ipm_split` (the Newton systems
+  in a split augmented form, for brackets tighter than ``1e-7``);
 * :mod:`.rounds` -- one relaxation by the dense path, checked, Clarabel where the check fails,
   and the record of which path answered each SOCP;
 * :mod:`.melan` -- ``lam2`` by cutting planes with a certified bracket;

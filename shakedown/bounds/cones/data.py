@@ -17,6 +17,7 @@ on the unit system.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import scipy.linalg as sla
@@ -105,6 +106,14 @@ class ConeData:
         b = np.einsum("mh,hm->m", c, self.bc[:, nodes]) + np.einsum("mh,hm->m", s,
                                                                      self.bs[:, nodes])
         return a, b
+
+    @cached_property
+    def coupling_bound(self) -> float:
+        """A proven upper bound of ``||E||_2`` (0 when uncoupled; computed once): the a-priori
+        bound on the state in :mod:`.dual`."""
+        from .dual import coupling_norm
+
+        return coupling_norm(self.E)
 
     def coupling(self, u) -> np.ndarray:
         """``E u``, shape (N,) (zeros for an uncoupled system)."""

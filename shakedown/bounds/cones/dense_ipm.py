@@ -19,7 +19,10 @@ step of iterative refinement on the reduced system.
 Accuracy: the normal equations of a second-order cone program become ill-conditioned as the
 gap closes (``cond ~ mu^-2``), and the directions lose their accuracy at a per-cone gap
 ``mu ~ 1e-9`` (measured); the iteration then stops at its best iterate, whose value agrees with
-Clarabel's to ``~ 1e-8`` relative.  The answer carries no trust of its own:
+Clarabel's to ``~ 1e-8`` relative.  With ``split=True`` the late iterations solve the Newton
+systems in the split augmented form of :mod:`.ipm_split` instead, which reaches relative gaps
+of ``~ 1e-12`` (used where the bracket must be closed tighter than the normal equations
+allow).  The answer carries no trust of its own:
 :func:`.rounds.solve_round` checks the state on the cuts, the multipliers by
 :func:`.socp.dual_bound` (cone membership, stationarity) and the gap between the two, and
 re-solves with Clarabel when they do not pass.
@@ -165,7 +168,7 @@ def _nt_scaling(s, z):
 
 
 def solve_dense(E, nodes, a1, b1, a0, b0, *, u0, lam0=0.0, cap=LAM_CAP, tol=IPM_TOL,
-                max_iter=IPM_MAX_ITER) -> CutAnswer:
+                max_iter=IPM_MAX_ITER, split=False) -> CutAnswer:
     """``max lam`` over the cuts (module docstring) by the dense interior point.
 
     Parameters
@@ -183,6 +186,11 @@ def solve_dense(E, nodes, a1, b1, a0, b0, *, u0, lam0=0.0, cap=LAM_CAP, tol=IPM_
     lam0 : float
     cap : float
         Upper bound on ``lam`` (reaching it: status ``"unbounded"``).
+    split : bool
+        Solve the Newton systems in the split augmented form of :mod:`.ipm_split` (accurate
+        to a relative gap of ~1e-12 instead of ~1e-8, dearer per iteration) once some cone
+        is ill-conditioned (``w0^2 >`` :data:`.ipm_split.SPLIT_LATE`); before that, and
+        always with ``split=False``, by the normal equations.
 
     Returns
     -------
@@ -228,7 +236,7 @@ def solve_dense(E, nodes, a1, b1, a0, b0, *, u0, lam0=0.0, cap=LAM_CAP, tol=IPM_
         if W is None:
             W, Winv, lm = _nt_scaling(s, z)
         try:
-            nt = _Newton(G, W, Winv, lm, sc, zc)
+            nt = _Newton(G, W, Winv, lm, sc, zc, split=split)
         except (np.linalg.LinAlgError, ValueError):
             break
         mu = gap / nu
@@ -275,11 +283,18 @@ class _Newton:
     :data:`REFINE` steps of iterative refinement on the whole system.  The cap row is a
     one-dimensional cone (``W = sqrt(sc / zc)``)."""
 
-    def __init__(self, G, W, Winv, lm, sc, zc):
+    def __init__(self, G, W, Winv, lm, sc, zc, split=False):
         self.G, self.W, self.lm = G, W, lm
         self.WT, self.WinvT = W.transpose(0, 2, 1), Winv.transpose(0, 2, 1)
         self.lmc, self.Wc, self.hc = np.sqrt(sc * zc), np.sqrt(sc / zc), zc / sc
         self.Hm = np.einsum("mab,mcb->mac", Winv, Winv)  # W^-1 W^-T
+        if split and _needs_split(W):  # rank-one parts of the active cones kept out of N
+            from .ipm_split import SplitSolver
+
+            self.cf = SplitSolver(G, W, self.Hm, self.hc)
+            self.split = True
+            return
+        self.split = False
         Nm = G.normal_matrix(self.Hm, self.hc)
         dg = np.sqrt(np.diag(Nm).copy())
         if not (np.all(dg > 0) and np.all(np.isfinite(dg))):
@@ -294,6 +309,8 @@ class _Newton:
         G, n = self.G, self.G.n
         Wt = np.einsum("mab,mb->ma", self.WT, _jdiv(self.lm, bs))
         tc = bsc / self.lmc
+        if self.split:
+            return self._once_split(bx_u, bx_l, bz, bzc, bz - Wt, bzc - self.Wc * tc)
         au, al = G.adjoint(np.einsum("mab,mb->ma", self.Hm, bz - Wt),
                            self.hc * (bzc - self.Wc * tc))
         dx = self.cf.solve(np.concatenate([(bx_u + au).reshape(-1), [bx_l + al]]))
@@ -301,6 +318,19 @@ class _Newton:
         gdx, gdc = G.apply(ddu, ddl)
         dz = np.einsum("mab,mb->ma", self.Hm, gdx - bz + Wt)
         dzc = self.hc * (gdc - bzc + self.Wc * tc)
+        return [ddu, ddl, dz, dzc, bz - gdx, bzc - gdc]
+
+    def _once_split(self, bx_u, bx_l, bz, bzc, c, cc):
+        """:meth:`_once` through :class:`.ipm_split.SplitSolver` (``c = bz - W^T (lam \\ bs)``)."""
+        G, n, sp_ = self.G, self.G.n, self.cf
+        au, al, rt = sp_.newton(bx_u, bx_l, c, cc)
+        al += self.hc * cc
+        dx, tau = sp_.solve(np.concatenate([(bx_u + au).reshape(-1), [bx_l + al]]), rt)
+        ddu, ddl = dx[:-1].reshape(n, 2), dx[-1]
+        gdx, gdc = G.apply(ddu, ddl)
+        dz = np.einsum("mab,mb->ma", sp_.H0, gdx - c)
+        dz[sp_.idx] += sp_.a * tau[:, None]
+        dzc = self.hc * (gdc - cc)
         return [ddu, ddl, dz, dzc, bz - gdx, bzc - gdc]
 
     def solve(self, bx_u, bx_l, bz, bzc, bs, bsc):
@@ -345,6 +375,14 @@ class _Newton:
                 break
             alpha *= 0.8
         return alpha
+
+
+def _needs_split(W):
+    """Whether some cone is far enough into the ill-conditioned regime (``w0^2 >``
+    :data:`.ipm_split.SPLIT_LATE`) for the split form to pay for itself."""
+    from .ipm_split import SPLIT_LATE, split_parts
+
+    return bool(split_parts(W)[2].max(initial=0.0) > SPLIT_LATE)
 
 
 class _Scaled:

@@ -24,7 +24,9 @@ class ConeBounds:
     lam2_lower, lam2_upper : float
         Certified bracket ``lam2_lower <= lam2_exact <= lam2_upper``: ``safe_state_at_lam2`` is
         safe at ``lam2_lower`` over the continuous cycle (exact worst times), and
-        ``certificate`` proves ``lam2_upper`` by weak duality.
+        ``certificate`` proves ``lam2_upper`` by weak duality, with the multipliers'
+        residuals charged against an a-priori bound on the state (valid whatever their
+        accuracy: :mod:`shakedown.bounds.cones.dual`).
     status : str
         ``"bounded"`` (bracket within ``rtol``), ``"bracket"`` (the round limit stopped it
         first: the bracket is still certified), ``"unbounded"`` (safe at every ``lam``),

@@ -3,8 +3,9 @@
 :func:`solve_round` solves the SOCP on the current cuts with the dense interior point
 (:mod:`.dense_ipm`, coupled systems) and accepts its answer only when it passes its own
 conditions: the state satisfies every cut (to :data:`PRIMAL_TOL` of the force scale), the
-multipliers lie in their cones and are stationary (:func:`.socp.dual_bound`, to the engine's
-``DUAL_TOL``) and the bound they prove is not below the state's value (weak duality); the
+multipliers lie in their cones and are stationary to the engine's ``DUAL_TOL`` (a quality
+screen: the bound :func:`.socp.dual_bound` computes from them is valid whatever their
+residuals, :mod:`.dual`) and that bound is not below the state's value (weak duality); the
 cutting-plane loop re-solves by Clarabel a round whose gap is too wide to close the bracket
 (:func:`.melan.melan_lam2`).  Otherwise Clarabel solves the
 same SOCP (:func:`.socp.solve_cuts`) and the reason is recorded.  :class:`SocpLog` keeps which
@@ -103,7 +104,7 @@ def check_round(data, nodes, times, ans, *, dual_tol):
     return None, (hi, res)
 
 
-def solve_round(data, nodes, times, *, solver, start, dual_tol, log, fail=None):
+def solve_round(data, nodes, times, *, solver, start, dual_tol, log, fail=None, split=False):
     """The relaxation on the cuts ``(nodes, times)`` (module docstring).
 
     Parameters
@@ -113,6 +114,9 @@ def solve_round(data, nodes, times, *, solver, start, dual_tol, log, fail=None):
     log : SocpLog
     fail : callable, optional
         Test hook: applied to the dense answer before it is checked (to force the fallback).
+    split : bool
+        The late Newton systems in the split augmented form (:mod:`.ipm_split`): for rounds
+        that must prove a bracket tighter than the normal equations allow.
 
     Returns
     -------
@@ -122,7 +126,8 @@ def solve_round(data, nodes, times, *, solver, start, dual_tol, log, fail=None):
     """
     if solver == "dense" and data.coupled:
         a1, b1 = data.periodic(times, nodes)
-        ans = solve_dense(data.E, nodes, a1, b1, data.a0, data.b0, u0=start[0], lam0=start[1])
+        ans = solve_dense(data.E, nodes, a1, b1, data.a0, data.b0, u0=start[0], lam0=start[1],
+                          split=split)
         if fail is not None:
             ans = fail(ans)
         why, bound = check_round(data, nodes, times, ans, dual_tol=dual_tol)

@@ -7,8 +7,9 @@ coupled system).  A *cut* ``(i, t)`` is node ``i``'s cone at time ``t``:
 
 :func:`solve_cuts` maximises ``lam`` over a finite set of cuts (a relaxation of the
 semi-infinite problem: its value bounds ``lam2`` from above) and returns the primal answer and
-the dual multipliers; :func:`dual_bound` recomputes the upper bound from the multipliers alone,
-checking their own conditions (cone membership and stationarity); :func:`static_margin` finds
+the dual multipliers; :func:`dual_bound` recomputes the upper bound from the multipliers alone, by
+weak duality made valid for inexact multipliers (:mod:`.dual`), and reports their residuals
+(cone membership and stationarity); :func:`static_margin` finds
 the state farthest inside every cone at ``lam = 0`` (the strictly safe anchor of the lower
 bound).
 """
@@ -22,6 +23,7 @@ import scipy.sparse as sp
 
 from ...model import citations
 from ...model.errors import MissingDependencyError
+from .dual import certified_bound
 
 #: Largest nondimensional load factor of a relaxation; reaching it means "unbounded".
 LAM_CAP = 1e6
@@ -147,21 +149,23 @@ def solve_cuts(data, nodes, times) -> CutAnswer:
 
 
 def dual_bound(data, nodes, times, z, y_cap=0.0):
-    """Upper bound on ``lam`` (nondimensional) proven by cut multipliers ``z`` (M, 3).
+    """Upper bound on ``lam2`` (nondimensional) proven by cut multipliers ``z`` (M, 3).
 
-    Weak duality: if every ``z_m`` lies in ``SOC_3`` and ``sum_m M_m^T z_m`` equals
-    ``(0, -1, 0)`` in ``(u, lam, ph)`` (with the multiplier of ``ph = E u`` eliminated:
-    ``y = sum_{m at node i} z_m0`` and the ``u`` rows ``sum z_m12 + E^T y = 0``), then every
-    state of the cuts has ``lam <= h . z + cap y_cap``.
+    Weak duality, valid whatever the multipliers (:func:`.dual.certified_bound`): ``z`` is
+    moved into its cones, and the stationarity residual ``r`` of the ``u`` rows (``sum_{m at
+    i} z_m12 + (E^T y)_i``, ``y_i = sum_{m at i} z_m0``) enters the bound through an a-priori
+    bound on the state instead of being neglected.  Exact multipliers prove
+    ``(h . z + cap y_cap) / D`` with ``D = y_cap - (lam-column of M^T z)``; inexact ones a
+    slightly larger value, wrong ones a much larger one or ``inf``; never a value below
+    ``lam2``.
 
     Returns
     -------
     bound : float
-        ``(h . z + cap y_cap) / (-(lam-column of M^T z) + y_cap)``, i.e. the bound after
-        normalising the ``lam`` stationarity row exactly (scaling ``z`` by a positive factor).
     residuals : dict
+        Of the multipliers as given (their quality, not their validity):
         ``"cone"``: largest ``max(|z_12| - z_0, 0)`` and ``"stationarity"``: largest ``u``-row
-        residual, both relative to ``max |z|`` (unit-free); ``"sign"``: ``max(-denominator, 0)``.
+        residual, both relative to ``max |z|`` (unit-free); ``"sign"``: ``max(-D, 0)``.
     """
     z = np.asarray(z, float).reshape(-1, 3)
     n = data.n_nodes
@@ -176,13 +180,21 @@ def dual_bound(data, nodes, times, z, y_cap=0.0):
         np.add.at(y, nodes, z[:, 0])
         ru = ru + (data.E.T @ y).reshape(n, 2)
     stat = float(np.abs(ru).max(initial=0.0)) / zs
-    # lam column: -(b1 . z0 + a1 . z12) + y_cap (from lam <= cap) must equal 1 after scaling
+    D = float(y_cap) - float(b1 @ z[:, 0] + np.einsum("mc,mc->", a1, z[:, 1:]))
+    sign = max(-D, 0.0) / zs
+    bound, _ = certified_bound(data, nodes, times, z, y_cap, cap=LAM_CAP)
+    return float(bound), {"cone": cone, "stationarity": stat, "sign": sign}
+
+
+def naive_bound(data, nodes, times, z, y_cap=0.0):
+    """``(h . z + cap y_cap) / D``: the bound of *exact* multipliers, with the residuals
+    ignored (the former rule; kept to show, in the tests, what it would accept)."""
+    z = np.asarray(z, float).reshape(-1, 3)
+    a1, b1 = data.periodic(times, np.asarray(nodes))
     D = float(y_cap) - float(b1 @ z[:, 0] + np.einsum("mc,mc->", a1, z[:, 1:]))
     h = np.column_stack([data.b0[nodes], data.a0[nodes]])
     num = float(np.einsum("mc,mc->", h, z)) + LAM_CAP * float(y_cap)
-    sign = max(-D, 0.0) / zs
-    bound = num / D if D > 0 else np.inf
-    return float(bound), {"cone": cone, "stationarity": stat, "sign": sign}
+    return num / D if D > 0 else np.inf
 
 
 def static_margin(data):
