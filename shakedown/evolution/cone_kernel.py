@@ -324,13 +324,8 @@ def residuals(Kn, rb, sx, sy, g, kT, kN, u, r, F, equilibrium):
         d = qx * vx + qy * vy + g[i] * p * np.sqrt((sx[i] * vx) ** 2 + (sy[i] * vy) ** 2)
         direc = max(direc, abs(d) * kT[i])
         normal = max(normal, abs(min(kN[i] * w, p)))
-    if equilibrium:
-        m = 3 * n
-        for j in range(m):
-            acc = rb[j] - r[j]
-            for k in range(m):
-                uk = u[k]
-                if uk != 0.0:
-                    acc += Kn[j, k] * uk
-            eq = max(eq, abs(acc))
+    if equilibrium:  # r = rb + K u recomputed with K's rows by BLAS (the solver used columns)
+        Ku = Kn @ u
+        for j in range(3 * n):
+            eq = max(eq, abs(rb[j] + Ku[j] - r[j]))
     return cone / F, direc / (F * F), normal / F, eq / F

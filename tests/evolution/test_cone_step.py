@@ -177,6 +177,18 @@ def test_gmres_and_lu_paths_agree():
         np.testing.assert_allclose(c.q, a.q, rtol=0, atol=1e-10 * a.force_scale)
 
 
+def test_gmres_with_separated_nodes_agrees_with_lu():
+    """The GMRES path's block-Jacobi preconditioner with 3 x 3 blocks (separated nodes) beside
+    the closed-form 2 x 2 inverses (slipping nodes): the same verified answer as LU."""
+    s, v, q_w, p_w = random_3d(40, 6, separation=True)
+    a = ConeStepSolver(s, dense_max=10 ** 6).solve(v, q_w, p_w)
+    b = ConeStepSolver(s, dense_max=4).solve(v, q_w, p_w)
+    assert a.success and b.success and b.method == "newton_cold"
+    assert np.any(a.states == ck.SEPARATED) and np.any(a.states == ck.SLIP)
+    np.testing.assert_allclose(b.q, a.q, rtol=0, atol=1e-10 * a.force_scale)
+    np.testing.assert_allclose(b.gap, a.gap, rtol=0, atol=1e-10 * a.force_scale)
+
+
 @settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(seed=st.integers(0, 2**31), fexp=st.integers(-6, 12), kexp=st.integers(-6, 12))
 def test_step_answers_scale_with_the_units(seed, fexp, kexp):
