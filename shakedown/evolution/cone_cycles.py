@@ -145,29 +145,44 @@ def _change(d, F, v1, w1, v0, w0):
 RHO_MAX = 0.95
 
 
-def _predictor(U_hist, d):
+def _predictor(U_hist, d, KU_hist=None):
     """Warm starts (steps, N, 3) of the next period from the increments of the last periods
     ``U_hist`` (oldest first, each (steps, N, 3)): the last one alone with fewer than three,
     else ``U1 + rho (U1 - U2)`` with ``rho = <U1 - U2, U2 - U3> / |U2 - U3|^2`` (slips scaled by
-    ``k_T``, gaps by ``C_ii``: force units) clipped to ``[0, RHO_MAX]``."""
+    ``k_T``, gaps by ``C_ii``: force units) clipped to ``[0, RHO_MAX]``.  With ``KU_hist`` (the
+    products ``K U`` of the same periods, node order) also the products of the warm starts, the
+    same combination: ``(G, KG)``."""
+    if KU_hist is not None:
+        G = _predictor(U_hist, d)
+        if G is None or len(U_hist) < 3 or G is U_hist[-1]:
+            return G, (KU_hist[-1] if KU_hist else None)
+        rho = _ratio(U_hist, d)
+        return G, KU_hist[-1] + rho * (KU_hist[-1] - KU_hist[-2])
     if not U_hist:
         return None
     U1 = U_hist[-1]
     if len(U_hist) < 3:
         return U1
+    rho = _ratio(U_hist, d)
+    return U1 if rho == 0.0 else U1 + rho * (U1 - U_hist[-2])
+
+
+def _ratio(U_hist, d):
+    """The clipped ratio ``rho`` of :func:`_predictor` (three periods or more)."""
+    U1 = U_hist[-1]
     s = np.column_stack([d.kT, d.kT, d.kN])
     a = (U1 - U_hist[-2]) * s
     b = (U_hist[-2] - U_hist[-3]) * s
     bb = float(np.sum(b * b))
     rho = float(np.sum(a * b)) / bb if bb > 0 else 0.0
-    rho = min(max(rho, 0.0), RHO_MAX) if np.isfinite(rho) else 0.0
-    return U1 if rho == 0.0 else U1 + rho * (U1 - U_hist[-2])
+    return min(max(rho, 0.0), RHO_MAX) if np.isfinite(rho) else 0.0
 
 
-def _period(solver, c, v, w, qg, pg, U_prev, st0):
+def _period(solver, c, v, w, qg, pg, U_prev, st0, KU_prev=None):
     """One period of implicit steps from ``(v, w)`` with warm starts ``U_prev`` (steps, N, 3)
-    (None: each step from the previous one); a CycleRecord (3-D shapes) and the increments
-    ``U`` (steps, N, 3)."""
+    (None: each step from the previous one) and their products ``KU_prev`` with ``K`` (node
+    order; None: computed by the steps); a CycleRecord (3-D shapes), the increments ``U`` and
+    their products ``K U`` (steps, N, 3) (``r - r_b`` of the steps)."""
     n_steps, n = pg.shape
     V = np.empty((n_steps + 1, n, 2))
     Q = np.empty_like(V)
@@ -191,7 +206,8 @@ def _period(solver, c, v, w, qg, pg, U_prev, st0):
     rb = solver.base(v, qg[0], pg[0])
     for j in range(n_steps):
         g = U_prev[j] if U_prev is not None else guess
-        u, r, s, name, it, res, F = solver.solve_raw(rb, g, equilibrium=False)
+        ku = KU_prev[j] if KU_prev is not None else None
+        u, r, s, name, it, res, F = solver.solve_raw(rb, g, equilibrium=False, ku0=ku)
         ok = res.worst <= solver.feas_tol
         key = ("unique" if solver.well_posed else "solved") if ok else "failed"
         statuses[key] = statuses.get(key, 0) + 1
@@ -199,7 +215,7 @@ def _period(solver, c, v, w, qg, pg, U_prev, st0):
         V[j + 1] = V[j] + u[:, :2]
         Wg[j + 1], Q[j + 1], P[j + 1] = u[:, 2], r[:, :2], r[:, 2]
         st[j + 1] = solver.kinematic_states(u, F)
-        act[j], U[j], R[j], scales[j] = s, u, r, F
+        act[j], U[j], R[j], RB[j], scales[j] = s, u, r, rb, F
         Wd -= float(np.sum(r[:, :2] * u[:, :2]))
         guess = u
         if ok and j + 1 < n_steps:  # the next base from this step's reactions (exact below)
@@ -215,9 +231,10 @@ def _period(solver, c, v, w, qg, pg, U_prev, st0):
                               st[:j + 2], Wd, ok=False, max_residual=worst, statuses=statuses,
                               message=f"step {j + 1} of period {c} (t = {t:.6g}): failed: "
                                       f"no verified solution (residual {res.worst:.3g})")
-            return rec, U
+            return rec, U, None
     # equilibrium of every step of the period by products with K (node order), from the base
     # reactions recomputed from the slips (the steps took them from the previous step's)
+    KU = R - RB  # K U of each step (for the next periods' warm starts)
     Vf = V[:-1].reshape(n_steps, -1)
     RB[:, :, :2] = qg + (Vf @ solver.A.T).reshape(n_steps, n, 2)
     RB[:, :, 2] = pg + Vf @ solver.Bt.T
@@ -232,7 +249,7 @@ def _period(solver, c, v, w, qg, pg, U_prev, st0):
     t = c - 1 + np.arange(n_steps + 1) / n_steps
     rec = CycleRecord(t, V, Wg, Q, P, st, Wd, active_sets=act, n_steps=n_steps,
                       max_residual=worst, ok=not msg, message=msg, statuses=statuses)
-    return rec, U
+    return rec, U, KU
 
 
 def _run(system, solver, load, lam, v0, w0, n_steps, max_cycles, tol, progress, record_history,
@@ -248,19 +265,20 @@ def _run(system, solver, load, lam, v0, w0, n_steps, max_cycles, tol, progress, 
     starts_v, starts_w = [v.copy()], [w.copy()]
     W_list, change, records, history = [], [], [], [] if record_history else None
     statuses: dict[str, int] = {}
-    max_res, period, ok, fail_msg, U_hist = 0.0, 0, True, "", []
+    max_res, period, ok, fail_msg, U_hist, KU_hist = 0.0, 0, True, "", [], []
     st0 = np.where(w * d.kN > 0, SEPARATED, 0).astype(np.int8)
     X, G, jumped = [], [], False  # Anderson memory: period starts and their changes
     v_end = v.copy()
     for c in range(1, max_cycles + 1):
-        rec, U = _period(solver, c, v, w, qg, pg, _predictor(U_hist, d), st0)
+        guesses, products = _predictor(U_hist, d, KU_hist)
+        rec, U, KU = _period(solver, c, v, w, qg, pg, guesses, st0, products)
         for k_, m_ in (rec.statuses or {}).items():
             statuses[k_] = statuses.get(k_, 0) + m_
         max_res = max(max_res, rec.max_residual)
         if not rec.ok:
             ok, fail_msg = False, rec.message
             break
-        U_hist = (U_hist + [U])[-3:]
+        U_hist, KU_hist = (U_hist + [U])[-3:], (KU_hist + [KU])[-3:]
         records = (records + [rec])[-2:]
         if history is not None:
             history.append(rec)
@@ -288,7 +306,8 @@ def _run(system, solver, load, lam, v0, w0, n_steps, max_cycles, tol, progress, 
             x = _anderson(X, G, v.ravel())
             if len(X) >= 2 and np.all(np.isfinite(x)):
                 v, jumped = x.reshape(v.shape), True
-                U_hist = U_hist[-1:]  # the approach was interrupted: no extrapolation across
+                # the approach was interrupted: no extrapolation across
+                U_hist, KU_hist = U_hist[-1:], KU_hist[-1:]
         starts_v.append(v.copy())
         starts_w.append(w.copy())
     return _finish_3d(system, solver, load, lam, n_steps, tol, F, records, history, period,

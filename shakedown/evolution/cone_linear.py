@@ -18,7 +18,8 @@ def _linear_solve(J, h, states, n, dense_max, x0, eta):
     preconditioned by the inverses of ``J``'s node blocks (2 x 2 slip, 3 x 3 separated) started
     from ``x0`` (the current Newton point: the answer of a warm start is near it), to a residual
     ``|h - J x| <= max(1e-14 |h|, eta |h - J x0|)`` (``eta``: the forcing term of the inexact
-    Newton method, ``0`` for an exact solve), with LU when it does not get there in 120
+    Newton method, ``0`` for an exact solve; the Arnoldi estimate of the residual, with a factor
+    2 of margin, ends the solve), with LU when it does not get there in 120
     iterations (a ``O(m^2)``-per-iteration path for the large, well-conditioned systems where the
     LU's ``O(m^3)`` dominates the step)."""
     m = h.size
@@ -104,6 +105,7 @@ def _linear_solve(J, h, states, n, dense_max, x0, eta):
             k_used = k + 1
             if abs(g[k + 1]) <= 0.5 * target or H[k, k] == 0.0:
                 break
+        converged = abs(g[k_used]) <= 0.5 * target
         y = np.zeros(k_used)
         for j in range(k_used - 1, -1, -1):
             acc = g[j]
@@ -119,6 +121,8 @@ def _linear_solve(J, h, states, n, dense_max, x0, eta):
         _precondition(Pinv, starts, nb, w, z)
         for a in range(m):
             x[a] += z[a]
+        if converged:  # the Arnoldi estimate, with a factor 2 of margin (the Newton method
+            return x   # checks its own residual after the step)
     _residual(J, h, x, rres)
     if np.sqrt(np.sum(rres * rres)) <= 10.0 * target:
         return x
