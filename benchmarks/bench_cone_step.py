@@ -97,35 +97,42 @@ def run_siconos(W, Q, mu, solvers, warm, tol=1e-12, python=SICONOS_PYTHON):
 
 
 def period_steps(s, load, lam, S=64, settle=2):
-    """Base reactions, warm starts and this code's answers of the steps of period
-    ``settle + 1`` (the driver's own path)."""
+    """Base reactions, warm starts, their products ``K u0`` (node order, from the previous
+    period's ``r - r_b``, as ``solve_cycles`` takes them) and this code's answers of the steps of
+    period ``settle + 1`` (the driver's own path, without its extrapolation, which starts at
+    period 4)."""
     from shakedown.evolution.cone_step import ConeStepSolver
 
     sol = ConeStepSolver(s)
     qg, pg = load.evaluate(np.arange(1, S + 1) / S, lam)
     v = np.zeros((s.n_nodes, 2))
-    U_prev = None
+    U_prev = KU_prev = None
     for _ in range(settle + 1):
-        RB, U0, U, R = [], [], [], []
+        RB, U0, KU0, U, R = [], [], [], [], []
         for j in range(S):
             rb = sol.base(v, qg[j], pg[j])
             g = U_prev[j] if U_prev is not None else (U[-1] if U else None)
+            KU0.append(KU_prev[j] if KU_prev is not None else None)
             u, r, *_ = sol.solve_raw(rb, g, equilibrium=False)
             RB.append(rb)
             U0.append(g)
             U.append(u)
             R.append(r)
             v = v + u[:, :2]
-        U_prev = U
-    return sol, np.array(RB), U0, np.array(U), np.array(R)
+        U_prev, KU_prev = U, [r - rb for r, rb in zip(R, RB, strict=True)]
+    return sol, np.array(RB), U0, KU0, np.array(U), np.array(R)
 
 
-def time_steps(sol, RB, guesses):
-    """Wall and CPU time [s] per step of ``sol.solve_raw`` (full verification), and answers."""
+def time_steps(sol, RB, guesses, products=None):
+    """Wall and CPU time [s] per step of ``sol.solve_raw`` (full verification, the equilibrium
+    recomputed with ``K``), and answers; ``products``: ``K u0`` of the guesses (None: the step
+    computes it)."""
     wall, cpu, R = [], [], []
-    for rb, g in zip(RB, guesses, strict=True):
+    products = [None] * len(RB) if products is None else products
+    for rb, g, ku in zip(RB, guesses, products, strict=True):
+        kw = {} if ku is None else dict(ku0=ku)
         t0, c0 = time.perf_counter(), time.process_time()
-        out = sol.solve_raw(rb, g, equilibrium=True)
+        out = sol.solve_raw(rb, g, equilibrium=True, **kw)
         wall.append(time.perf_counter() - t0)
         cpu.append(time.process_time() - c0)
         R.append(out[1].ravel())
@@ -153,7 +160,7 @@ def part_siconos(n, lam, repeats, seed=0, baseline=None, solvers=("nsgs", "nsn_a
     same steps, repeats interleaved; per start the median over the steps of the median over the
     repeats, wall and CPU."""
     s, load = coupled_system_3d(n, seed=seed)
-    sol, RB, U0, U, R = period_steps(s, load, lam)
+    sol, RB, U0, KU0, U, R = period_steps(s, load, lam)
     F = np.abs(RB).max()
     slipping = float(np.mean([np.mean(np.hypot(*u[:, :2].T) > 0) for u in U]))
     W, Q, perm = to_fc3d(sol.data.Kn, RB)
@@ -169,8 +176,9 @@ def part_siconos(n, lam, repeats, seed=0, baseline=None, solvers=("nsgs", "nsn_a
         fin, fout = Path(tmp) / "steps.npz", Path(tmp) / "base.npz"
         np.savez(fin, A=s.A, B=s.B, C=s.C, f=s.friction_xy[:, 0], RB=RB, U0=np.array(U0))
         for _ in range(repeats):
-            for start, guesses in (("warm", U0), ("cold", [None] * len(RB))):
-                w_, c_, Rr = time_steps(sol, RB, guesses)
+            for start, guesses, kus in (("warm", U0, KU0), ("warm, K u0 computed", U0, None),
+                                        ("cold", [None] * len(RB), None)):
+                w_, c_, Rr = time_steps(sol, RB, guesses, kus)
                 add(("this code", start, "wall"), w_)
                 add(("this code", start, "cpu"), c_)
                 diffs[("this code", start)] = (float(np.abs(Rr - ours).max() / F), 0)
@@ -217,7 +225,8 @@ def part_big(n, lam, S=64, anderson=0, max_cycles=200):
                           progress=progress, **kw)
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     slipped = n - run.stuck_nodes.size if run.period else -1
-    np.save(f"/tmp/bench_cone_big_{n}_{anderson}_slip.npy", run.final_slip)
+    tag = Path(sd.__file__).resolve().parent.parent.name
+    np.save(f"/tmp/bench_cone_big_{n}_{anderson}_{tag}_slip.npy", run.final_slip)
     return dict(n=n, lam=lam, wall=wall, cpu=cpu, anderson=anderson, status=run.status, cycles=run.n_cycles,
                 period=run.period, slipped=slipped, W=run.steady_dissipation,
                 newton=run.statistics["newton_iterations"], steps=run.statistics["n_steps"],
@@ -288,13 +297,15 @@ def main():
                       "code (CPU) | max diff / F | not converged |", "|---|---|---|---|---|---|---|"]
             who = ["this code"] + (["main"] if a.baseline else []) + [
                 f"Siconos {k.upper()}" for k in r["solvers"]]
-            for start in ("warm", "cold"):
+            for start in ("warm", "warm, K u0 computed", "cold"):
                 o = m[("this code", start, "cpu")]
-                for w_ in who:
+                for w_ in (who if start != "warm, K u0 computed" else ["this code"]):
                     t, c = m[(w_, start, "wall")], m[(w_, start, "cpu")]
                     d, bad = r["diffs"][(w_, start)]
                     lines.append(f"| {w_} | {start} | {1e3 * t:.3f} | {1e3 * c:.3f} | "
                                  f"{c / o:.1f}x | {d:.2e} | {bad} |")
+                if start == "warm, K u0 computed":
+                    continue
                 sic = min(m[(w_, start, "cpu")] for w_ in who if w_.startswith("Siconos"))
                 summary.append((seed, start, sic / o,
                                 m[("main", start, "cpu")] / o if a.baseline else float("nan")))
