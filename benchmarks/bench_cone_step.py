@@ -20,6 +20,9 @@ siconos  The steps of one period (64 steps, after two settling periods) of a cou
 big      ``solve_cycles`` of a coupled random system with ``--big-n`` nodes to the steady state
          at 64 steps per period (one process, one BLAS thread), at a load factor where most
          nodes slip every period; wall time, periods, Newton iterations.
+answers  The cyclic runs of ``ANSWER_PROBLEMS`` (N = 6..150, two seeds, two load factors, 32
+         steps per period) in this tree and in ``--baseline``: periods, differences of the
+         answers, Newton iterations, CPU.
 order    The convergence order in the number of steps per period: the rotating-load node
          (closed form ``W = 2 pi f P sqrt(Q^2 - f^2 P^2) / k``) and a coupled 4-node system
          (reference: 2048 steps); error, observed order and wall time per S (the
@@ -233,6 +236,57 @@ def part_big(n, lam, S=64, anderson=0, max_cycles=200):
                 energy=run.energy_identity.discrete_relative_difference if run.period else None)
 
 
+ANSWER_PROBLEMS = [(n, seed, lam) for n in (6, 20, 60, 150) for seed in (0, 1)
+                   for lam in (0.5, 0.8)]
+
+
+def part_runs(out, S=32):
+    """``solve_cycles`` (plain cycling) of :data:`ANSWER_PROBLEMS` in this tree: periods, steady
+    dissipation, final slips, the last period's reactions and the CPU time, saved to ``out``."""
+    import shakedown as sd
+
+    res = {}
+    for k, (n, seed, lam) in enumerate(ANSWER_PROBLEMS):
+        s, load = coupled_system_3d(n, seed=seed)
+        c0 = time.process_time()
+        run = sd.solve_cycles(s, load, lam, steps_per_cycle=S)
+        res[f"cpu{k}"] = time.process_time() - c0
+        res[f"cycles{k}"] = run.n_cycles
+        res[f"W{k}"] = run.steady_dissipation
+        res[f"slip{k}"] = run.final_slip
+        res[f"q{k}"] = run.steady_orbit[-1].q
+        res[f"F{k}"] = run.force_scale
+        res[f"k{k}"] = float(np.diag(s.A).max())
+        res[f"newton{k}"] = run.statistics["newton_iterations"]
+    np.savez(out, **res)
+
+
+def part_answers(baseline):
+    """The cyclic runs of :data:`ANSWER_PROBLEMS` in this tree and in ``baseline`` (subprocesses,
+    one after the other): the largest differences of the answers and the CPU times."""
+    outs = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for repo in (str(HERE.parent), baseline):
+            out = Path(tmp) / f"runs{len(outs)}.npz"
+            env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
+            subprocess.run([sys.executable, __file__, "--parts", "runs", "--repo", repo,
+                            "--steps-out", str(out)], check=True, env=env)
+            with np.load(out) as d:
+                outs.append({k: d[k] for k in d.files})
+    a, b = outs
+    rows = []
+    for k, (n, seed, lam) in enumerate(ANSWER_PROBLEMS):
+        F = float(a[f"F{k}"])
+        kmax = float(a[f"k{k}"])  # slips in units of F / max_i A_ii
+        rows.append((n, seed, lam, int(a[f"cycles{k}"]), int(b[f"cycles{k}"]),
+                     abs(float(a[f"W{k}"]) / float(b[f"W{k}"]) - 1),
+                     float(np.abs(a[f"slip{k}"] - b[f"slip{k}"]).max() * kmax / F),
+                     float(np.abs(a[f"q{k}"] - b[f"q{k}"]).max() / F),
+                     int(a[f"newton{k}"]), int(b[f"newton{k}"]),
+                     float(a[f"cpu{k}"]), float(b[f"cpu{k}"])))
+    return rows
+
+
 def part_order():
     import shakedown as sd
 
@@ -273,7 +327,7 @@ def main():
                     help="part big: budget of periods (a few: a per-period comparison)")
     ap.add_argument("--repo", default=None, help="import shakedown from this tree (baseline)")
     ap.add_argument("--baseline", default=None,
-                    help="part siconos: also time the step of this tree (e.g. /work/main)")
+                    help="parts siconos, answers: the baseline tree (e.g. /work/main)")
     ap.add_argument("--seeds", type=int, default=1, help="part siconos: random systems")
     ap.add_argument("--steps-in", default=None)
     ap.add_argument("--steps-out", default=None)
@@ -285,6 +339,19 @@ def main():
     if "steptimes" in parts:
         part_steptimes(a.steps_in, a.steps_out)
         return
+    if "runs" in parts:
+        part_runs(a.steps_out)
+        return
+    if "answers" in parts:
+        rows = part_answers(a.baseline)
+        lines += ["## Cyclic runs: this code against the baseline (plain cycling, 32 steps per "
+                  "period)", "", "| N | seed | lam | periods (this, base) | W rel. diff | "
+                  "final slip diff / (F / k) | last reactions diff / F | Newton its (this, base) "
+                  "| CPU [s] (this, base) |", "|---|---|---|---|---|---|---|---|---|"]
+        for n, sd_, lam, c1, c2, dw, dv, dq, i1, i2, t1, t2 in rows:
+            lines.append(f"| {n} | {sd_} | {lam} | {c1}, {c2} | {dw:.1e} | {dv:.1e} | {dq:.1e} "
+                         f"| {i1}, {i2} | {t1:.2f}, {t2:.2f} |")
+        lines.append("")
     if "siconos" in parts and siconos_available():
         summary = []
         for seed in range(a.seeds):

@@ -19,7 +19,11 @@ rho (U_{c-1} - U_{c-2})`` per step, with ``rho`` the least-squares ratio of the 
 period-to-period changes of the increments (in force units, :func:`_predictor`), clipped to
 ``[0, RHO_MAX]`` (0: the plain start).  Only where the Newton method starts changes: every step
 is still solved to the same tolerance and verified, so the answers are those of the plain start
-to the step's tolerance.
+to the step's tolerance.  Products with ``K`` are reused: a step's base reactions ``(q_w + A v,
+p_w + B^T v)`` are the previous step's reactions minus its gaps' share plus the change of the
+welded load, and the reactions ``r_b + K u_0`` of a warm start come from the stored ``K U =
+r - r_b`` of the periods it combines; the equilibrium of every step is then checked once per
+period against base reactions recomputed from the slips (one matrix product per period).
 
 Acceleration (``anderson_memory > 0``, off by default): the start of the next period is the
 Anderson (type II) combination of the last ``anderson_memory + 1`` period starts ``x`` and their
