@@ -258,3 +258,25 @@ def test_bad_input_is_refused_by_name():
         sol.solve(v, q_w * np.nan, p_w)
     with pytest.raises(InputError, match="f_x and f_y"):
         ConeStepSolver(s.with_friction([[0.3, 0.0], [0.3, 0.3], [0.3, 0.3]]))
+
+
+def test_warm_start_with_its_reactions_given_and_a_wrong_product_caught_by_the_verifier():
+    """``solve_raw(..., ku0=K u0)`` (the cyclic driver's warm start, whose product with ``K`` it
+    knows from earlier periods) gives the answer of the plain warm start; with a wrong product the
+    warm answer is not accepted (its verification fails), and the cold restart, which computes
+    its own reactions, finds the right answer."""
+    s, v, q_w, p_w = random_3d(12, 2)
+    sol = ConeStepSolver(s)
+    ref = sol.solve(v, q_w, p_w)
+    rb = sol.base(v, q_w, p_w)
+    u0 = np.column_stack([ref.slip_increment, ref.gap])
+    u0 = u0 + 1e-3 * np.abs(u0).max() * np.random.default_rng(0).normal(size=u0.shape)
+    ku0 = (sol.data.Kn @ u0.ravel()).reshape(-1, 3)
+    plain = sol.solve_raw(rb, u0)
+    given = sol.solve_raw(rb, u0, ku0=ku0)
+    F = ref.force_scale
+    assert given[3] == plain[3] == "newton" and given[5].worst <= sol.feas_tol
+    np.testing.assert_allclose(given[1], plain[1], rtol=0, atol=1e-12 * F)
+    wrong = sol.solve_raw(rb, u0, ku0=ku0 + 1e-6 * F)
+    assert wrong[3] == "newton_cold" and wrong[5].worst <= sol.feas_tol
+    np.testing.assert_allclose(wrong[1][:, :2], ref.q, rtol=0, atol=1e-10 * F)
