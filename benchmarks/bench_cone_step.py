@@ -20,6 +20,9 @@ siconos  The steps of one period (64 steps, after two settling periods) of a cou
 big      ``solve_cycles`` of a coupled random system with ``--big-n`` nodes to the steady state
          at 64 steps per period (one process, one BLAS thread), at a load factor where most
          nodes slip every period; wall time, periods, Newton iterations.
+answers  The cyclic runs of ``ANSWER_PROBLEMS`` (N = 6..150, two seeds, two load factors, 32
+         steps per period) in this tree and in ``--baseline``: periods, differences of the
+         answers, Newton iterations, CPU.
 order    The convergence order in the number of steps per period: the rotating-load node
          (closed form ``W = 2 pi f P sqrt(Q^2 - f^2 P^2) / k``) and a coupled 4-node system
          (reference: 2048 steps); error, observed order and wall time per S (the
@@ -97,35 +100,42 @@ def run_siconos(W, Q, mu, solvers, warm, tol=1e-12, python=SICONOS_PYTHON):
 
 
 def period_steps(s, load, lam, S=64, settle=2):
-    """Base reactions, warm starts and this code's answers of the steps of period
-    ``settle + 1`` (the driver's own path)."""
+    """Base reactions, warm starts, their products ``K u0`` (node order, from the previous
+    period's ``r - r_b``, as ``solve_cycles`` takes them) and this code's answers of the steps of
+    period ``settle + 1`` (the driver's own path, without its extrapolation, which starts at
+    period 4)."""
     from shakedown.evolution.cone_step import ConeStepSolver
 
     sol = ConeStepSolver(s)
     qg, pg = load.evaluate(np.arange(1, S + 1) / S, lam)
     v = np.zeros((s.n_nodes, 2))
-    U_prev = None
+    U_prev = KU_prev = None
     for _ in range(settle + 1):
-        RB, U0, U, R = [], [], [], []
+        RB, U0, KU0, U, R = [], [], [], [], []
         for j in range(S):
             rb = sol.base(v, qg[j], pg[j])
             g = U_prev[j] if U_prev is not None else (U[-1] if U else None)
+            KU0.append(KU_prev[j] if KU_prev is not None else None)
             u, r, *_ = sol.solve_raw(rb, g, equilibrium=False)
             RB.append(rb)
             U0.append(g)
             U.append(u)
             R.append(r)
             v = v + u[:, :2]
-        U_prev = U
-    return sol, np.array(RB), U0, np.array(U), np.array(R)
+        U_prev, KU_prev = U, [r - rb for r, rb in zip(R, RB, strict=True)]
+    return sol, np.array(RB), U0, KU0, np.array(U), np.array(R)
 
 
-def time_steps(sol, RB, guesses):
-    """Wall and CPU time [s] per step of ``sol.solve_raw`` (full verification), and answers."""
+def time_steps(sol, RB, guesses, products=None):
+    """Wall and CPU time [s] per step of ``sol.solve_raw`` (full verification, the equilibrium
+    recomputed with ``K``), and answers; ``products``: ``K u0`` of the guesses (None: the step
+    computes it)."""
     wall, cpu, R = [], [], []
-    for rb, g in zip(RB, guesses, strict=True):
+    products = [None] * len(RB) if products is None else products
+    for rb, g, ku in zip(RB, guesses, products, strict=True):
+        kw = {} if ku is None else dict(ku0=ku)
         t0, c0 = time.perf_counter(), time.process_time()
-        out = sol.solve_raw(rb, g, equilibrium=True)
+        out = sol.solve_raw(rb, g, equilibrium=True, **kw)
         wall.append(time.perf_counter() - t0)
         cpu.append(time.process_time() - c0)
         R.append(out[1].ravel())
@@ -153,7 +163,7 @@ def part_siconos(n, lam, repeats, seed=0, baseline=None, solvers=("nsgs", "nsn_a
     same steps, repeats interleaved; per start the median over the steps of the median over the
     repeats, wall and CPU."""
     s, load = coupled_system_3d(n, seed=seed)
-    sol, RB, U0, U, R = period_steps(s, load, lam)
+    sol, RB, U0, KU0, U, R = period_steps(s, load, lam)
     F = np.abs(RB).max()
     slipping = float(np.mean([np.mean(np.hypot(*u[:, :2].T) > 0) for u in U]))
     W, Q, perm = to_fc3d(sol.data.Kn, RB)
@@ -169,8 +179,9 @@ def part_siconos(n, lam, repeats, seed=0, baseline=None, solvers=("nsgs", "nsn_a
         fin, fout = Path(tmp) / "steps.npz", Path(tmp) / "base.npz"
         np.savez(fin, A=s.A, B=s.B, C=s.C, f=s.friction_xy[:, 0], RB=RB, U0=np.array(U0))
         for _ in range(repeats):
-            for start, guesses in (("warm", U0), ("cold", [None] * len(RB))):
-                w_, c_, Rr = time_steps(sol, RB, guesses)
+            for start, guesses, kus in (("warm", U0, KU0), ("warm, K u0 computed", U0, None),
+                                        ("cold", [None] * len(RB), None)):
+                w_, c_, Rr = time_steps(sol, RB, guesses, kus)
                 add(("this code", start, "wall"), w_)
                 add(("this code", start, "cpu"), c_)
                 diffs[("this code", start)] = (float(np.abs(Rr - ours).max() / F), 0)
@@ -217,11 +228,63 @@ def part_big(n, lam, S=64, anderson=0, max_cycles=200):
                           progress=progress, **kw)
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     slipped = n - run.stuck_nodes.size if run.period else -1
-    np.save(f"/tmp/bench_cone_big_{n}_{anderson}_slip.npy", run.final_slip)
+    tag = Path(sd.__file__).resolve().parent.parent.name
+    np.save(f"/tmp/bench_cone_big_{n}_{anderson}_{tag}_slip.npy", run.final_slip)
     return dict(n=n, lam=lam, wall=wall, cpu=cpu, anderson=anderson, status=run.status, cycles=run.n_cycles,
                 period=run.period, slipped=slipped, W=run.steady_dissipation,
                 newton=run.statistics["newton_iterations"], steps=run.statistics["n_steps"],
                 energy=run.energy_identity.discrete_relative_difference if run.period else None)
+
+
+ANSWER_PROBLEMS = [(n, seed, lam) for n in (6, 20, 60, 150) for seed in (0, 1)
+                   for lam in (0.5, 0.8)]
+
+
+def part_runs(out, S=32):
+    """``solve_cycles`` (plain cycling) of :data:`ANSWER_PROBLEMS` in this tree: periods, steady
+    dissipation, final slips, the last period's reactions and the CPU time, saved to ``out``."""
+    import shakedown as sd
+
+    res = {}
+    for k, (n, seed, lam) in enumerate(ANSWER_PROBLEMS):
+        s, load = coupled_system_3d(n, seed=seed)
+        c0 = time.process_time()
+        run = sd.solve_cycles(s, load, lam, steps_per_cycle=S)
+        res[f"cpu{k}"] = time.process_time() - c0
+        res[f"cycles{k}"] = run.n_cycles
+        res[f"W{k}"] = run.steady_dissipation
+        res[f"slip{k}"] = run.final_slip
+        res[f"q{k}"] = run.steady_orbit[-1].q
+        res[f"F{k}"] = run.force_scale
+        res[f"k{k}"] = float(np.diag(s.A).max())
+        res[f"newton{k}"] = run.statistics["newton_iterations"]
+    np.savez(out, **res)
+
+
+def part_answers(baseline):
+    """The cyclic runs of :data:`ANSWER_PROBLEMS` in this tree and in ``baseline`` (subprocesses,
+    one after the other): the largest differences of the answers and the CPU times."""
+    outs = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for repo in (str(HERE.parent), baseline):
+            out = Path(tmp) / f"runs{len(outs)}.npz"
+            env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
+            subprocess.run([sys.executable, __file__, "--parts", "runs", "--repo", repo,
+                            "--steps-out", str(out)], check=True, env=env)
+            with np.load(out) as d:
+                outs.append({k: d[k] for k in d.files})
+    a, b = outs
+    rows = []
+    for k, (n, seed, lam) in enumerate(ANSWER_PROBLEMS):
+        F = float(a[f"F{k}"])
+        kmax = float(a[f"k{k}"])  # slips in units of F / max_i A_ii
+        rows.append((n, seed, lam, int(a[f"cycles{k}"]), int(b[f"cycles{k}"]),
+                     abs(float(a[f"W{k}"]) / float(b[f"W{k}"]) - 1),
+                     float(np.abs(a[f"slip{k}"] - b[f"slip{k}"]).max() * kmax / F),
+                     float(np.abs(a[f"q{k}"] - b[f"q{k}"]).max() / F),
+                     int(a[f"newton{k}"]), int(b[f"newton{k}"]),
+                     float(a[f"cpu{k}"]), float(b[f"cpu{k}"])))
+    return rows
 
 
 def part_order():
@@ -264,7 +327,7 @@ def main():
                     help="part big: budget of periods (a few: a per-period comparison)")
     ap.add_argument("--repo", default=None, help="import shakedown from this tree (baseline)")
     ap.add_argument("--baseline", default=None,
-                    help="part siconos: also time the step of this tree (e.g. /work/main)")
+                    help="parts siconos, answers: the baseline tree (e.g. /work/main)")
     ap.add_argument("--seeds", type=int, default=1, help="part siconos: random systems")
     ap.add_argument("--steps-in", default=None)
     ap.add_argument("--steps-out", default=None)
@@ -276,6 +339,19 @@ def main():
     if "steptimes" in parts:
         part_steptimes(a.steps_in, a.steps_out)
         return
+    if "runs" in parts:
+        part_runs(a.steps_out)
+        return
+    if "answers" in parts:
+        rows = part_answers(a.baseline)
+        lines += ["## Cyclic runs: this code against the baseline (plain cycling, 32 steps per "
+                  "period)", "", "| N | seed | lam | periods (this, base) | W rel. diff | "
+                  "final slip diff / (F / k) | last reactions diff / F | Newton its (this, base) "
+                  "| CPU [s] (this, base) |", "|---|---|---|---|---|---|---|---|---|"]
+        for n, sd_, lam, c1, c2, dw, dv, dq, i1, i2, t1, t2 in rows:
+            lines.append(f"| {n} | {sd_} | {lam} | {c1}, {c2} | {dw:.1e} | {dv:.1e} | {dq:.1e} "
+                         f"| {i1}, {i2} | {t1:.2f}, {t2:.2f} |")
+        lines.append("")
     if "siconos" in parts and siconos_available():
         summary = []
         for seed in range(a.seeds):
@@ -288,13 +364,15 @@ def main():
                       "code (CPU) | max diff / F | not converged |", "|---|---|---|---|---|---|---|"]
             who = ["this code"] + (["main"] if a.baseline else []) + [
                 f"Siconos {k.upper()}" for k in r["solvers"]]
-            for start in ("warm", "cold"):
+            for start in ("warm", "warm, K u0 computed", "cold"):
                 o = m[("this code", start, "cpu")]
-                for w_ in who:
+                for w_ in (who if start != "warm, K u0 computed" else ["this code"]):
                     t, c = m[(w_, start, "wall")], m[(w_, start, "cpu")]
                     d, bad = r["diffs"][(w_, start)]
                     lines.append(f"| {w_} | {start} | {1e3 * t:.3f} | {1e3 * c:.3f} | "
                                  f"{c / o:.1f}x | {d:.2e} | {bad} |")
+                if start == "warm, K u0 computed":
+                    continue
                 sic = min(m[(w_, start, "cpu")] for w_ in who if w_.startswith("Siconos"))
                 summary.append((seed, start, sic / o,
                                 m[("main", start, "cpu")] / o if a.baseline else float("nan")))

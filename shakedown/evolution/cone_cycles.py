@@ -14,7 +14,16 @@ F / k_i``.
 
 Warm start: step ``j`` of period ``c >= 2`` starts the Newton method from the increment and gaps
 of step ``j`` of period ``c - 1`` (the orbit being approached repeats them), period 1 from the
-previous step's.
+previous step's.  From period 4 on, the start is extrapolated along the approach: ``U_{c-1} +
+rho (U_{c-1} - U_{c-2})`` per step, with ``rho`` the least-squares ratio of the last two
+period-to-period changes of the increments (in force units, :func:`_predictor`), clipped to
+``[0, RHO_MAX]`` (0: the plain start).  Only where the Newton method starts changes: every step
+is still solved to the same tolerance and verified, so the answers are those of the plain start
+to the step's tolerance.  Products with ``K`` are reused: a step's base reactions ``(q_w + A v,
+p_w + B^T v)`` are the previous step's reactions minus its gaps' share plus the change of the
+welded load, and the reactions ``r_b + K u_0`` of a warm start come from the stored ``K U =
+r - r_b`` of the periods it combines; the equilibrium of every step is then checked once per
+period against base reactions recomputed from the slips (one matrix product per period).
 
 Acceleration (``anderson_memory > 0``, off by default): the start of the next period is the
 Anderson (type II) combination of the last ``anderson_memory + 1`` period starts ``x`` and their
@@ -136,9 +145,48 @@ def _change(d, F, v1, w1, v0, w0):
     return float(np.max(d.kT * dv + d.kN * np.abs(w1 - w0), initial=0.0) / F)
 
 
-def _period(solver, c, v, w, qg, pg, U_prev, st0):
-    """One period of implicit steps from ``(v, w)``; a CycleRecord (3-D shapes) and the
-    increments ``U`` (steps, N, 3) for the next period's warm start."""
+#: Largest ratio of the geometric approach used by the warm-start extrapolation.
+RHO_MAX = 0.95
+
+
+def _predictor(U_hist, d, KU_hist=None):
+    """Warm starts (steps, N, 3) of the next period from the increments of the last periods
+    ``U_hist`` (oldest first, each (steps, N, 3)): the last one alone with fewer than three,
+    else ``U1 + rho (U1 - U2)`` with ``rho = <U1 - U2, U2 - U3> / |U2 - U3|^2`` (slips scaled by
+    ``k_T``, gaps by ``C_ii``: force units) clipped to ``[0, RHO_MAX]``.  With ``KU_hist`` (the
+    products ``K U`` of the same periods, node order) also the products of the warm starts, the
+    same combination: ``(G, KG)``."""
+    if KU_hist is not None:
+        G = _predictor(U_hist, d)
+        if G is None or len(U_hist) < 3 or G is U_hist[-1]:
+            return G, (KU_hist[-1] if KU_hist else None)
+        rho = _ratio(U_hist, d)
+        return G, KU_hist[-1] + rho * (KU_hist[-1] - KU_hist[-2])
+    if not U_hist:
+        return None
+    U1 = U_hist[-1]
+    if len(U_hist) < 3:
+        return U1
+    rho = _ratio(U_hist, d)
+    return U1 if rho == 0.0 else U1 + rho * (U1 - U_hist[-2])
+
+
+def _ratio(U_hist, d):
+    """The clipped ratio ``rho`` of :func:`_predictor` (three periods or more)."""
+    U1 = U_hist[-1]
+    s = np.column_stack([d.kT, d.kT, d.kN])
+    a = (U1 - U_hist[-2]) * s
+    b = (U_hist[-2] - U_hist[-3]) * s
+    bb = float(np.sum(b * b))
+    rho = float(np.sum(a * b)) / bb if bb > 0 else 0.0
+    return min(max(rho, 0.0), RHO_MAX) if np.isfinite(rho) else 0.0
+
+
+def _period(solver, c, v, w, qg, pg, U_prev, st0, KU_prev=None):
+    """One period of implicit steps from ``(v, w)`` with warm starts ``U_prev`` (steps, N, 3)
+    (None: each step from the previous one) and their products ``KU_prev`` with ``K`` (node
+    order; None: computed by the steps); a CycleRecord (3-D shapes), the increments ``U`` and
+    their products ``K U`` (steps, N, 3) (``r - r_b`` of the steps)."""
     n_steps, n = pg.shape
     V = np.empty((n_steps + 1, n, 2))
     Q = np.empty_like(V)
@@ -158,10 +206,12 @@ def _period(solver, c, v, w, qg, pg, U_prev, st0):
     Wd = 0.0
     worst = 0.0
     statuses: dict[str, int] = {}
+    Kn = solver.data.Kn
+    rb = solver.base(v, qg[0], pg[0])
     for j in range(n_steps):
-        rb = solver.base(V[j], qg[j], pg[j])
         g = U_prev[j] if U_prev is not None else guess
-        u, r, s, name, it, res, F = solver.solve_raw(rb, g, equilibrium=False)
+        ku = KU_prev[j] if KU_prev is not None else None
+        u, r, s, name, it, res, F = solver.solve_raw(rb, g, equilibrium=False, ku0=ku)
         ok = res.worst <= solver.feas_tol
         key = ("unique" if solver.well_posed else "solved") if ok else "failed"
         statuses[key] = statuses.get(key, 0) + 1
@@ -172,15 +222,26 @@ def _period(solver, c, v, w, qg, pg, U_prev, st0):
         act[j], U[j], R[j], RB[j], scales[j] = s, u, r, rb, F
         Wd -= float(np.sum(r[:, :2] * u[:, :2]))
         guess = u
+        if ok and j + 1 < n_steps:  # the next base from this step's reactions (exact below)
+            rb = r.copy()
+            rb[:, :2] += qg[j + 1] - qg[j]
+            rb[:, 2] += pg[j + 1] - pg[j]
+            sep = np.flatnonzero(u[:, 2])
+            if sep.size:  # minus the gaps' reactions (B w, C w) of this step
+                rb -= (Kn[:, 3 * sep + 2] @ u[sep, 2]).reshape(n, 3)
         if not ok:
             t = c - 1 + (j + 1) / n_steps
             rec = CycleRecord(np.zeros(0), V[:j + 2], Wg[:j + 2], Q[:j + 2], P[:j + 2],
                               st[:j + 2], Wd, ok=False, max_residual=worst, statuses=statuses,
                               message=f"step {j + 1} of period {c} (t = {t:.6g}): failed: "
                                       f"no verified solution (residual {res.worst:.3g})")
-            return rec, U
-    # equilibrium of every step of the period by one product with K (node order)
-    Kn = solver.data.Kn
+            return rec, U, None
+    # equilibrium of every step of the period by products with K (node order), from the base
+    # reactions recomputed from the slips (the steps took them from the previous step's)
+    KU = R - RB  # K U of each step (for the next periods' warm starts)
+    Vf = V[:-1].reshape(n_steps, -1)
+    RB[:, :, :2] = qg + (Vf @ solver.A.T).reshape(n_steps, n, 2)
+    RB[:, :, 2] = pg + Vf @ solver.Bt.T
     eq = np.abs(RB.reshape(n_steps, -1) + U.reshape(n_steps, -1) @ Kn - R.reshape(n_steps, -1))
     eq = eq.max(axis=1) / scales
     worst = max(worst, float(eq.max()))
@@ -192,7 +253,7 @@ def _period(solver, c, v, w, qg, pg, U_prev, st0):
     t = c - 1 + np.arange(n_steps + 1) / n_steps
     rec = CycleRecord(t, V, Wg, Q, P, st, Wd, active_sets=act, n_steps=n_steps,
                       max_residual=worst, ok=not msg, message=msg, statuses=statuses)
-    return rec, U
+    return rec, U, KU
 
 
 def _run(system, solver, load, lam, v0, w0, n_steps, max_cycles, tol, progress, record_history,
@@ -208,19 +269,20 @@ def _run(system, solver, load, lam, v0, w0, n_steps, max_cycles, tol, progress, 
     starts_v, starts_w = [v.copy()], [w.copy()]
     W_list, change, records, history = [], [], [], [] if record_history else None
     statuses: dict[str, int] = {}
-    max_res, period, ok, fail_msg, U_prev = 0.0, 0, True, "", None
+    max_res, period, ok, fail_msg, U_hist, KU_hist = 0.0, 0, True, "", [], []
     st0 = np.where(w * d.kN > 0, SEPARATED, 0).astype(np.int8)
     X, G, jumped = [], [], False  # Anderson memory: period starts and their changes
     v_end = v.copy()
     for c in range(1, max_cycles + 1):
-        rec, U = _period(solver, c, v, w, qg, pg, U_prev, st0)
+        guesses, products = _predictor(U_hist, d, KU_hist)
+        rec, U, KU = _period(solver, c, v, w, qg, pg, guesses, st0, products)
         for k_, m_ in (rec.statuses or {}).items():
             statuses[k_] = statuses.get(k_, 0) + m_
         max_res = max(max_res, rec.max_residual)
         if not rec.ok:
             ok, fail_msg = False, rec.message
             break
-        U_prev = U
+        U_hist, KU_hist = (U_hist + [U])[-3:], (KU_hist + [KU])[-3:]
         records = (records + [rec])[-2:]
         if history is not None:
             history.append(rec)
@@ -248,6 +310,8 @@ def _run(system, solver, load, lam, v0, w0, n_steps, max_cycles, tol, progress, 
             x = _anderson(X, G, v.ravel())
             if len(X) >= 2 and np.all(np.isfinite(x)):
                 v, jumped = x.reshape(v.shape), True
+                # the approach was interrupted: no extrapolation across
+                U_hist, KU_hist = U_hist[-1:], KU_hist[-1:]
         starts_v.append(v.copy())
         starts_w.append(w.copy())
     return _finish_3d(system, solver, load, lam, n_steps, tol, F, records, history, period,

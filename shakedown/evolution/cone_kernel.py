@@ -169,7 +169,7 @@ def _newton_point(Kn, rb, sx, sy, g, rhoT, states, nhat, cfac, unew, dense_max, 
 
 @njit(cache=True)
 def newton(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, dense_max=DENSE_MAX,
-           slack=0.0, scale=0.0):
+           slack=0.0, scale=0.0, given_r=False):
     """Semismooth Newton on the Alart-Curnier equations from the guess ``u`` (in place).
 
     Parameters
@@ -183,7 +183,8 @@ def newton(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, dense_max
     u : ndarray, shape (3N,)
         Guess on entry, answer on exit.
     r : ndarray, shape (3N,)
-        Reactions of the answer (output).
+        Reactions of the answer (output); with ``given_r``, on entry the reactions ``rb + Kn u``
+        of the guess (known to the caller, e.g. from earlier steps' products with ``Kn``).
     states : ndarray of int8, shape (N,)
         States of the answer's piece (output).
     tol : float
@@ -198,6 +199,8 @@ def newton(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, dense_max
         reduced systems are inexact, to the relative residual ``eta = max(min(1e-2, res /
         scale), 0.1 tol / res)`` (``res = max |phi|``: quadratic convergence is kept, and no
         solve goes below a tenth of ``tol``); ``0``: exact solves.
+    given_r : bool
+        ``r`` holds the guess's reactions on entry (one product with ``Kn`` saved).
 
     Returns
     -------
@@ -217,7 +220,8 @@ def newton(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, dense_max
     cf_try = np.zeros(n)
     dr = np.empty(3 * n)
     zero = np.zeros(3 * n)
-    _reactions(Kn, rb, u, r)
+    if not given_r:
+        _reactions(Kn, rb, u, r)
     merit = _classify(r, u, sx, sy, g, rhoT, rhoN, states, phi, nhat, cfac, slack)
     it = 0
     while it < max_iter:
@@ -324,13 +328,8 @@ def residuals(Kn, rb, sx, sy, g, kT, kN, u, r, F, equilibrium):
         d = qx * vx + qy * vy + g[i] * p * np.sqrt((sx[i] * vx) ** 2 + (sy[i] * vy) ** 2)
         direc = max(direc, abs(d) * kT[i])
         normal = max(normal, abs(min(kN[i] * w, p)))
-    if equilibrium:
-        m = 3 * n
-        for j in range(m):
-            acc = rb[j] - r[j]
-            for k in range(m):
-                uk = u[k]
-                if uk != 0.0:
-                    acc += Kn[j, k] * uk
-            eq = max(eq, abs(acc))
+    if equilibrium:  # r = rb + K u recomputed with K's rows by BLAS (the solver used columns)
+        Ku = Kn @ u
+        for j in range(3 * n):
+            eq = max(eq, abs(rb[j] + Ku[j] - r[j]))
     return cone / F, direc / (F * F), normal / F, eq / F

@@ -18,13 +18,14 @@ def _linear_solve(J, h, states, n, dense_max, x0, eta):
     preconditioned by the inverses of ``J``'s node blocks (2 x 2 slip, 3 x 3 separated) started
     from ``x0`` (the current Newton point: the answer of a warm start is near it), to a residual
     ``|h - J x| <= max(1e-14 |h|, eta |h - J x0|)`` (``eta``: the forcing term of the inexact
-    Newton method, ``0`` for an exact solve), with LU when it does not get there in 120
+    Newton method, ``0`` for an exact solve; the Arnoldi estimate of the residual, with a factor
+    2 of margin, ends the solve), with LU when it does not get there in 120
     iterations (a ``O(m^2)``-per-iteration path for the large, well-conditioned systems where the
     LU's ``O(m^3)`` dominates the step)."""
     m = h.size
     if m <= dense_max:
         return np.linalg.solve(J, h)
-    # block-Jacobi preconditioner
+    # block-Jacobi preconditioner: the inverses of the node blocks in closed form
     Pinv = np.zeros((m, 3))
     starts = np.empty(n + 1, np.int64)
     nb = 0
@@ -36,17 +37,21 @@ def _linear_solve(J, h, states, n, dense_max, x0, eta):
             nb += 1
     starts[nb] = pos
     for b in range(nb):
-        a0, a1 = starts[b], starts[b + 1]
-        blk = np.linalg.inv(J[a0:a1, a0:a1].copy())
-        for a in range(a1 - a0):
-            for c in range(a1 - a0):
-                Pinv[a0 + a, c] = blk[a, c]
+        a0 = starts[b]
+        if starts[b + 1] - a0 == 2:
+            p, q, r, s = J[a0, a0], J[a0, a0 + 1], J[a0 + 1, a0], J[a0 + 1, a0 + 1]
+            det = p * s - q * r
+            Pinv[a0, 0], Pinv[a0, 1] = s / det, -q / det
+            Pinv[a0 + 1, 0], Pinv[a0 + 1, 1] = -r / det, p / det
+        else:
+            blk = np.linalg.inv(J[a0:a0 + 3, a0:a0 + 3].copy())
+            for a in range(3):
+                for c in range(3):
+                    Pinv[a0 + a, c] = blk[a, c]
     hn = np.sqrt(np.sum(h * h))
     x = x0.copy()
     if hn == 0.0:
         return np.zeros(m)
-    r0 = h - J @ x
-    target = max(1e-14 * hn, eta * np.sqrt(np.sum(r0 * r0)))
     restart = 40
     V = np.empty((restart + 1, m))
     H = np.zeros((restart + 1, restart))
@@ -54,32 +59,39 @@ def _linear_solve(J, h, states, n, dense_max, x0, eta):
     sn = np.empty(restart)
     g = np.empty(restart + 1)
     z = np.empty(m)
+    w = np.empty(m)
+    rres = np.empty(m)
+    target = -1.0
     total = 0
     while total < 120:
-        rres = h - J @ x
+        _residual(J, h, x, rres)
         beta = np.sqrt(np.sum(rres * rres))
+        if target < 0.0:
+            target = max(1e-14 * hn, eta * beta)
         if beta <= target:
             return x
-        V[0] = rres / beta
+        for a in range(m):
+            V[0, a] = rres[a] / beta
         g[:] = 0.0
         g[0] = beta
         k_used = 0
         for k in range(restart):
             total += 1
-            for b in range(nb):  # z = P^-1 V[k]
-                a0, a1 = starts[b], starts[b + 1]
-                for a in range(a1 - a0):
-                    acc = 0.0
-                    for c in range(a1 - a0):
-                        acc += Pinv[a0 + a, c] * V[k, a0 + c]
-                    z[a0 + a] = acc
-            w = J @ z
-            for j in range(k + 1):
-                H[j, k] = np.dot(w, V[j])
-                w -= H[j, k] * V[j]
-            H[k + 1, k] = np.sqrt(np.sum(w * w))
-            if H[k + 1, k] > 0.0:
-                V[k + 1] = w / H[k + 1, k]
+            _precondition(Pinv, starts, nb, V[k], z)
+            _matvec(J, z, w)
+            for j in range(k + 1):  # modified Gram-Schmidt
+                Vj = V[j]
+                acc = 0.0
+                for a in range(m):
+                    acc += w[a] * Vj[a]
+                H[j, k] = acc
+                for a in range(m):
+                    w[a] -= acc * Vj[a]
+            hk = np.sqrt(np.sum(w * w))
+            H[k + 1, k] = hk
+            if hk > 0.0:
+                for a in range(m):
+                    V[k + 1, a] = w[a] / hk
             for j in range(k):
                 t = cs[j] * H[j, k] + sn[j] * H[j + 1, k]
                 H[j + 1, k] = -sn[j] * H[j, k] + cs[j] * H[j + 1, k]
@@ -93,26 +105,54 @@ def _linear_solve(J, h, states, n, dense_max, x0, eta):
             k_used = k + 1
             if abs(g[k + 1]) <= 0.5 * target or H[k, k] == 0.0:
                 break
+        converged = abs(g[k_used]) <= 0.5 * target
         y = np.zeros(k_used)
         for j in range(k_used - 1, -1, -1):
             acc = g[j]
             for c in range(j + 1, k_used):
                 acc -= H[j, c] * y[c]
             y[j] = acc / H[j, j]
-        upd = np.zeros(m)
+        w[:] = 0.0
         for j in range(k_used):
-            upd += y[j] * V[j]
-        for b in range(nb):
-            a0, a1 = starts[b], starts[b + 1]
-            for a in range(a1 - a0):
-                acc = 0.0
-                for c in range(a1 - a0):
-                    acc += Pinv[a0 + a, c] * upd[a0 + c]
-                x[a0 + a] += acc
-    rres = h - J @ x
+            Vj = V[j]
+            yj = y[j]
+            for a in range(m):
+                w[a] += yj * Vj[a]
+        _precondition(Pinv, starts, nb, w, z)
+        for a in range(m):
+            x[a] += z[a]
+        if converged:  # the Arnoldi estimate, with a factor 2 of margin (the Newton method
+            return x   # checks its own residual after the step)
+    _residual(J, h, x, rres)
     if np.sqrt(np.sum(rres * rres)) <= 10.0 * target:
         return x
     return np.linalg.solve(J, h)
+
+
+@njit(cache=True)
+def _matvec(J, z, out):
+    """``out = J z`` (BLAS)."""
+    out[:] = J @ z
+
+
+@njit(cache=True)
+def _residual(J, h, x, out):
+    """``out = h - J x``."""
+    _matvec(J, x, out)
+    for a in range(h.size):
+        out[a] = h[a] - out[a]
+
+
+@njit(cache=True)
+def _precondition(Pinv, starts, nb, v, out):
+    """``out = P^-1 v`` with the block inverses ``Pinv`` (rows of 2 or 3 entries per block)."""
+    for b in range(nb):
+        a0, a1 = starts[b], starts[b + 1]
+        for a in range(a1 - a0):
+            acc = 0.0
+            for c in range(a1 - a0):
+                acc += Pinv[a0 + a, c] * v[a0 + c]
+            out[a0 + a] = acc
 
 
 __all__ = ["DENSE_MAX", "_linear_solve"]

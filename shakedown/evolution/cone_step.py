@@ -206,9 +206,12 @@ class ConeStepSolver:
         rb[:, 2] = np.asarray(p_w, float) + self.Bt @ v
         return rb
 
-    def solve_raw(self, rb, u0=None, equilibrium: bool = True):
+    def solve_raw(self, rb, u0=None, equilibrium: bool = True, ku0=None):
         """Solve from base reactions ``rb`` (N, 3) and guess ``u0`` (N, 3) [warm start];
-        ``equilibrium``: passed to :func:`verify_step`.
+        ``equilibrium``: passed to :func:`verify_step`; ``ku0`` (N, 3): ``K u0`` in node order
+        when the caller knows it (from earlier products with ``K``: the warm start then skips
+        its own; the answer's equilibrium must then be checked, ``equilibrium=True`` or by the
+        caller).
 
         Returns ``(u, r, states, method, iterations, residuals, scale)``; ``u, r`` (N, 3)."""
         n = self.n
@@ -226,8 +229,11 @@ class ConeStepSolver:
         iters = 0
         for name, guess in tries:
             u = np.zeros(3 * n) if guess is None else np.array(guess, float).ravel()
+            given = guess is not None and ku0 is not None
+            if given:
+                r[:] = rbf + np.asarray(ku0, float).ravel()
             code, it, _ = ck.newton(d.Kn, rbf, d.sx, d.sy, d.g, self.rhoT, self.rhoN, u, r, st,
-                                    tol, self.max_iter, self.dense_max, slack, F)
+                                    tol, self.max_iter, self.dense_max, slack, F, given)
             iters += it
             res = self._verify(rbf, u, r, F, equilibrium)
             if best is None or res.worst < best[3].worst:

@@ -256,3 +256,73 @@ def test_anderson_accelerator_reaches_the_plain_steady_cycle_in_fewer_periods():
     assert fast.state_change[-1] <= fast.tol and fast.cycle_start_slips.shape == (
         fast.n_cycles + 1, 6, 2)
     assert fast.energy_identity.discrete_relative_difference <= 1e-9
+
+
+def test_warm_start_predictor_extrapolates_a_geometric_approach_exactly():
+    """``_predictor``: increments approaching ``U*`` geometrically, ``U_k = U* + rho^k D``, are
+    extrapolated to the next one exactly; an alternating approach (rho < 0) and a short history
+    fall back to the last period's increments."""
+    from shakedown.evolution.cone_cycles import _predictor
+    from shakedown.evolution.cone_step import ConeStepSolver
+
+    s, _ = slow_coupled_3d()
+    d = ConeStepSolver(s).data
+    rng = np.random.default_rng(0)
+    Us, D = rng.normal(size=(8, 6, 3)), rng.normal(size=(8, 6, 3))
+    for rho in (0.1, 0.55, 0.9):
+        hist = [Us + rho ** k * D for k in (1, 2, 3)]
+        np.testing.assert_allclose(_predictor(hist, d), Us + rho ** 4 * D, rtol=0, atol=1e-13)
+    alternating = [Us + (-0.5) ** k * D for k in (1, 2, 3)]
+    assert np.array_equal(_predictor(alternating, d), alternating[-1])
+    assert np.array_equal(_predictor(alternating[:2], d), alternating[1])
+    assert _predictor([], d) is None
+
+
+def test_extrapolated_warm_starts_give_the_plain_answers_with_fewer_newton_iterations(
+        monkeypatch):
+    """The driver's extrapolated warm starts change only where each step's Newton method starts:
+    the same periods, state changes, steady cycle and slips as the plain start (previous
+    period's same step) to the step's tolerance, in fewer Newton iterations."""
+    from shakedown.evolution import cone_cycles
+
+    s, load = slow_coupled_3d()
+    fast = sd.solve_cycles(s, load, 0.5, steps_per_cycle=32)
+    monkeypatch.setattr(cone_cycles, "RHO_MAX", 0.0)  # rho clipped to 0: the plain start
+    plain = sd.solve_cycles(s, load, 0.5, steps_per_cycle=32)
+    F, k = plain.force_scale, np.diag(s.A).max()
+    assert fast.status == plain.status == "periodic" and fast.n_cycles == plain.n_cycles
+    np.testing.assert_allclose(fast.state_change, plain.state_change, rtol=1e-4, atol=1e-11)
+    np.testing.assert_allclose(fast.final_slip, plain.final_slip, rtol=0, atol=1e-11 * F / k)
+    np.testing.assert_allclose(fast.dissipation, plain.dissipation, rtol=1e-11)
+    assert (fast.statistics["newton_iterations"]
+            < 0.8 * plain.statistics["newton_iterations"])
+
+
+def test_every_recorded_point_is_in_equilibrium_with_its_slips_and_gaps():
+    """The driver takes each step's base reactions from the previous step's reactions (minus the
+    gaps' share) and re-derives them from the slips once per period: every recorded point of a
+    coupled run with separation satisfies ``q = q_w + A v + B w``, ``p = p_w + B^T v + C w``
+    recomputed here from the load and the system's matrices."""
+    rng = np.random.default_rng(3)
+    n = 5
+    M = rng.normal(size=(3 * n, 3 * n))
+    K = M @ M.T / (3 * n) + np.eye(3 * n)
+    s = sd.DiscreteSystem(K[:2 * n, :2 * n], 0.3 * K[:2 * n, 2 * n:], K[2 * n:, 2 * n:],
+                          friction=0.3, dim=3)
+    load = sd.LoadCycle.from_harmonics(q0=np.zeros((n, 2)), p0=np.ones(n),
+                                       q_cos=rng.normal(size=(n, 2)),
+                                       q_sin=rng.normal(size=(n, 2)),
+                                       p_cos=np.r_[1.6, 1.6, np.zeros(n - 2)])
+    run = sd.solve_cycles(s, load, 0.8, steps_per_cycle=16, max_cycles=6)
+    assert run.max_residual <= 1e-9
+    F = run.force_scale
+    gaps = 0
+    for rec in run.steady_orbit:
+        qw, pw = load.evaluate(rec.t[1:] % 1.0, 0.8)
+        v, w = rec.v[1:].reshape(len(rec.t) - 1, -1), rec.w[1:]
+        q = qw.reshape(len(v), -1) + v @ s.A.T + w @ s.B.T
+        p = pw + v @ s.B + w @ s.C.T
+        np.testing.assert_allclose(rec.q[1:].reshape(len(v), -1), q, rtol=0, atol=1e-9 * F)
+        np.testing.assert_allclose(rec.p[1:], p, rtol=0, atol=1e-9 * F)
+        gaps += int(np.sum(w > 0))
+    assert gaps > 0

@@ -177,6 +177,18 @@ def test_gmres_and_lu_paths_agree():
         np.testing.assert_allclose(c.q, a.q, rtol=0, atol=1e-10 * a.force_scale)
 
 
+def test_gmres_with_separated_nodes_agrees_with_lu():
+    """The GMRES path's block-Jacobi preconditioner with 3 x 3 blocks (separated nodes) beside
+    the closed-form 2 x 2 inverses (slipping nodes): the same verified answer as LU."""
+    s, v, q_w, p_w = random_3d(40, 6, separation=True)
+    a = ConeStepSolver(s, dense_max=10 ** 6).solve(v, q_w, p_w)
+    b = ConeStepSolver(s, dense_max=4).solve(v, q_w, p_w)
+    assert a.success and b.success and b.method == "newton_cold"
+    assert np.any(a.states == ck.SEPARATED) and np.any(a.states == ck.SLIP)
+    np.testing.assert_allclose(b.q, a.q, rtol=0, atol=1e-10 * a.force_scale)
+    np.testing.assert_allclose(b.gap, a.gap, rtol=0, atol=1e-10 * a.force_scale)
+
+
 @settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(seed=st.integers(0, 2**31), fexp=st.integers(-6, 12), kexp=st.integers(-6, 12))
 def test_step_answers_scale_with_the_units(seed, fexp, kexp):
@@ -246,3 +258,25 @@ def test_bad_input_is_refused_by_name():
         sol.solve(v, q_w * np.nan, p_w)
     with pytest.raises(InputError, match="f_x and f_y"):
         ConeStepSolver(s.with_friction([[0.3, 0.0], [0.3, 0.3], [0.3, 0.3]]))
+
+
+def test_warm_start_with_its_reactions_given_and_a_wrong_product_caught_by_the_verifier():
+    """``solve_raw(..., ku0=K u0)`` (the cyclic driver's warm start, whose product with ``K`` it
+    knows from earlier periods) gives the answer of the plain warm start; with a wrong product the
+    warm answer is not accepted (its verification fails), and the cold restart, which computes
+    its own reactions, finds the right answer."""
+    s, v, q_w, p_w = random_3d(12, 2)
+    sol = ConeStepSolver(s)
+    ref = sol.solve(v, q_w, p_w)
+    rb = sol.base(v, q_w, p_w)
+    u0 = np.column_stack([ref.slip_increment, ref.gap])
+    u0 = u0 + 1e-3 * np.abs(u0).max() * np.random.default_rng(0).normal(size=u0.shape)
+    ku0 = (sol.data.Kn @ u0.ravel()).reshape(-1, 3)
+    plain = sol.solve_raw(rb, u0)
+    given = sol.solve_raw(rb, u0, ku0=ku0)
+    F = ref.force_scale
+    assert given[3] == plain[3] == "newton" and given[5].worst <= sol.feas_tol
+    np.testing.assert_allclose(given[1], plain[1], rtol=0, atol=1e-12 * F)
+    wrong = sol.solve_raw(rb, u0, ku0=ku0 + 1e-6 * F)
+    assert wrong[3] == "newton_cold" and wrong[5].worst <= sol.feas_tol
+    np.testing.assert_allclose(wrong[1][:, :2], ref.q, rtol=0, atol=1e-10 * F)
