@@ -61,9 +61,18 @@ def run_cli(root: Path, cache: str, out: str, policy: str | None = None) -> dict
     return dict(wall=wall, cpu=cpu, load=load, stdout=p.stdout, stderr=p.stderr)
 
 
-def stop_background(run: dict) -> bool:
-    """Stop the background compile a cold run started (its pid is in the run's note) and wait
-    for it to exit (it removes its own lock file); whether there was one."""
+def lock_of(root: Path) -> str:
+    """The background compile's lock file of the tree ``root`` (its own ``lock_path``)."""
+    return subprocess.run([sys.executable, "-c", "from shakedown.evolution.kernel_warm import "
+                           "lock_path; print(lock_path())"], env=_env(root, "", None),
+                          cwd=tempfile.gettempdir(), capture_output=True, text=True,
+                          check=True).stdout.strip()
+
+
+def stop_background(run: dict, root: Path) -> bool:
+    """Stop the background compile a cold run started (its pid is in the run's note), wait for
+    it to exit and remove its lock file (a process stopped by SIGTERM leaves it); whether there
+    was one."""
     pid = re.search(r"\(pid (\d+)\)", run["stderr"])
     if not pid:
         return False
@@ -73,6 +82,9 @@ def stop_background(run: dict) -> bool:
             time.sleep(0.2)
     except ProcessLookupError:
         pass
+    lock = lock_of(root)
+    if os.path.exists(lock):
+        os.remove(lock)
     return True
 
 
@@ -80,7 +92,8 @@ def fill_cache(root: Path, cache: str) -> float:
     """Compile the kernel of ``root`` into ``cache`` in the foreground; its CPU seconds."""
     r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     subprocess.run([sys.executable, "-c", "from shakedown.evolution.kernel_warm import warm_up; "
-                    "warm_up()"], env=_env(root, cache, "compile"), check=True)
+                    "warm_up()"], env=_env(root, cache, "compile"), check=True,
+                   cwd=tempfile.gettempdir())  # not this folder: '' first on sys.path
     r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
     return (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
 
@@ -96,20 +109,22 @@ def main():
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--baseline", type=Path, default=None,
                     help="a source tree to measure side by side (e.g. an archive of main)")
+    ap.add_argument("--skip-cold", action="store_true", help="only the warm runs")
     args = ap.parse_args()
     trees = [("this", ROOT)] + ([("baseline", args.baseline.resolve())] if args.baseline else [])
     print(f"machine: {os.cpu_count()} cores, {os.uname().machine}, Python "
           f"{sys.version.split()[0]}; uptime: {os.popen('uptime').read().strip()}", flush=True)
     with tempfile.TemporaryDirectory() as tmp:
         first = {}
-        for k in range(args.repeats):  # cold: an empty cache each time, trees alternated
+        for k in range(0 if args.skip_cold else args.repeats):  # cold: an empty cache each
+            # time, trees alternated
             for name, root in trees:
                 cache = os.path.join(tmp, f"cold-{name}-{k}")
                 out = os.path.join(tmp, f"out-cold-{name}-{k}")
                 os.mkdir(cache)
                 os.mkdir(out)
                 r = run_cli(root, cache, out)
-                stop_background(r)
+                stop_background(r, root)
                 first.setdefault(name, _results(r))
                 _line("cold", name, r, _results(r) == first[name])
         caches = {}
@@ -124,6 +139,7 @@ def main():
                 out = os.path.join(tmp, f"out-warm-{name}-{k}")
                 os.mkdir(out)
                 r = run_cli(root, caches[name], out)
+                first.setdefault(name, _results(r))
                 _line("warm", name, r, _results(r) == first[name])
         if len(first) == 2:
             print("printed results of this tree and the baseline the same:",
