@@ -147,9 +147,11 @@ def main():
 
 
 def _results(r) -> str:
-    """The printed results without the run's own seconds (``wall_s``)."""
+    """The printed results without the run's own seconds (``wall_s``) and the scene file's path
+    (which names the source tree)."""
     text = r["stdout"].split("results written")[0]
-    return "\n".join(line for line in text.splitlines() if "wall_s" not in line)
+    return "\n".join(line for line in text.splitlines()
+                     if "wall_s" not in line and not line.startswith("scene: "))
 
 
 if __name__ == "__main__":
