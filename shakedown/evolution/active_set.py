@@ -39,6 +39,15 @@ class ActiveSet:
     def _violations_step(self, s, z, q, p, ft, dtol):
         """:meth:`_violations` of the step problem (every state allowed, no node held), with
         one (4, N) array and no per-state masks: ``None`` when no sign is violated."""
+        cand = self._step_candidates(s, z, q, p, ft, dtol)
+        if cand.max() <= 1.0:
+            return None
+        target = np.argmax(cand, axis=0).astype(np.int8)
+        return cand[target, np.arange(self.n)], target
+
+    def _step_candidates(self, s, z, q, p, ft, dtol):
+        """The (4, N) normalised violations of the step problem's signs (> 1: violated; < -1:
+        held by more than the tolerance; ``-inf`` where a check does not apply)."""
         n = self.n
         fp = self.f * p
         cand = np.empty((4, n))
@@ -55,10 +64,39 @@ class ActiveSet:
         cand[STICK][isS] = -np.inf
         cand[FORWARD:SEPARATED, ~isS] = -np.inf
         cand[SEPARATED][isO] = -np.inf
-        if cand.max() <= 1.0:
+        return cand
+
+    def _probe(self, g, q0, p0, scale, ft, dtol):
+        """The prediction ``g`` (the same step's assignment in the previous period) as the
+        step's answer: a :class:`MixedSolution` when its factor is cached (or ``g`` is all
+        stick) and every node holds its checks by more than the tolerance, else ``None``.
+
+        Strictly inside the checks (no node at a state boundary, where another assignment
+        gives the same answer to the tolerance) the answer's states determine the assignment,
+        so with a unique step answer it is the one the iteration from the guess ends with (the
+        kernel's probe, :func:`.kernel._probe`).  No factor is computed for a prediction."""
+        key = g.tobytes()
+        if np.any(g != STICK):
+            F = self._cache.get(key)
+            if F is None:
+                return None
+            z = self._lu_solve(F, q0, p0)
+            q, p = self._reactions(z, q0, p0, self._last_factor)
+        else:
+            F = None
+            self._last_factor = None
+            z = np.zeros(2 * self.n)
+            q, p = q0.copy(), p0.copy()
+        if not self._step_candidates(g, z, q, p, ft, dtol).max() < -1.0:
             return None
-        target = np.argmax(cand, axis=0).astype(np.int8)
-        return cand[target, np.arange(n)], target
+        hits = 0 if F is None else 1
+        if F is not None:
+            self._cache.move_to_end(key)
+            self._base = F
+        self.totals["cache_hits"] += hits
+        self.totals["iterations"] += 1
+        return MixedSolution(g.copy(), z, q, p, True, "active_set", 1, 0,
+                             dict(factorizations=0, updates=0, cache_hits=hits))
 
     def residuals(self, z, q, p, allowed, forced, scale):
         """Natural complementarity residual of an answer (dimensionless; see StepResult).
@@ -96,11 +134,13 @@ class ActiveSet:
         return res
 
     # ------------------------------------------------------------------ the mixed problem
-    def solve_mixed(self, q0, p0, allowed=None, guess=None, scale=None) -> MixedSolution:
+    def solve_mixed(self, q0, p0, allowed=None, guess=None, scale=None,
+                    prediction=None) -> MixedSolution:
         """Solve the step (or rate) problem with base reactions ``(q0, p0)`` at ``z = 0``.
 
         ``allowed`` (N, 4) bool: the states each node may take (rows with a single ``True`` are
         held in that state with no sign check: the interior nodes of a rate problem).
+        ``prediction`` (step problem only): an assignment tried first by :meth:`_probe`.
         """
         n = self.n
         step = allowed is None
@@ -116,6 +156,10 @@ class ActiveSet:
             bad = ~allowed[np.arange(n), s]
             s[bad] = np.argmax(allowed[bad], axis=1)
         self._counters = dict(factorizations=0, updates=0, cache_hits=0)
+        if step and prediction is not None and not np.array_equal(prediction, s):
+            sol = self._probe(np.asarray(prediction, np.int8), q0, p0, scale, ft, dtol)
+            if sol is not None:
+                return sol
         visited = set()
         single = False
         it = 0

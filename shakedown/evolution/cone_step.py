@@ -36,7 +36,7 @@ STICK_SLACK = 0.5
 STATE_NAMES_3D = ("stick", "slip", "unused", "separation")
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)  # StepResult's short repr
 class ConeStepResult(StepResult):
     """One 3-D implicit step: :class:`~.step_types.StepResult` with 3-D shapes.
 

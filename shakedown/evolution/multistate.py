@@ -59,7 +59,7 @@ def _state_change(D, F, v1, w1, v0, w0):
     return float(np.max(D[:n] * np.abs(v1 - v0) + D[n:] * np.abs(w1 - w0), initial=0.0) / F)
 
 
-def solve_many(solver, V, q_w, p_w, guesses, Q0, P0, bases=None):
+def solve_many(solver, V, q_w, p_w, guesses, Q0, P0, bases=None, predictions=None):
     """One implicit step of several states with shared welded reactions.
 
     Parameters
@@ -76,6 +76,9 @@ def solve_many(solver, V, q_w, p_w, guesses, Q0, P0, bases=None):
     bases : list, optional
         Each state's own base factor of the low-rank updates (updated in place): states on
         different paths then do not take each other's factor as the base of their updates.
+    predictions : list, optional
+        Each state's prediction (its assignment at this step in its previous period, or
+        None), passed to :meth:`StepSolver.solve` for the states solved one by one.
 
     Returns
     -------
@@ -85,7 +88,7 @@ def solve_many(solver, V, q_w, p_w, guesses, Q0, P0, bases=None):
     """
     k, n = V.shape
     out = [None] * k
-    if solver.well_posed is True:  # the status of a verified answer is then "unique"
+    if k > 1 and solver.well_posed is True:  # the status of a verified answer is "unique"
         scales = np.maximum(max(np.abs(q_w).max(), np.abs(p_w).max()),
                             np.maximum(np.abs(Q0).max(axis=1), np.abs(P0).max(axis=1)))
         scales[scales <= 0] = 1.0
@@ -105,7 +108,8 @@ def solve_many(solver, V, q_w, p_w, guesses, Q0, P0, bases=None):
             if bases is not None:
                 solver._base = bases[i]
             out[i] = solver.solve(V[i], q_w, p_w, guesses[i], base=(Q0[i], P0[i]),
-                                  verify=False)
+                                  verify=False,
+                                  prediction=None if predictions is None else predictions[i])
             if bases is not None:
                 bases[i] = solver._base
     return out
@@ -253,16 +257,25 @@ def _implicit_cycles(solver, c, tracks, qw, pw, load, lam):
             else:
                 tr.last_act = act[i]  # the next period's prediction (kernel's probe)
         alive = alive[:0]
-    for j in range(n_steps if alive.size else 0):
+    # each state's assignments of its previous period predict this one's (the kernel's probe,
+    # StepSolver._probe): on a steady or settling orbit step j's assignment is the previous
+    # period's, one solve with a cached factor instead of two from the previous step's guess
+    pred = [tracks[i].last_act if solver.well_posed is True else None for i in range(k)]
+    dqw, dpw = np.diff(qw, axis=0), np.diff(pw, axis=0)
+    alive = [int(i) for i in alive]
+    for j in range(n_steps if alive else 0):
         bases = [tracks[i].base for i in alive]
         res = solve_many(solver, V[alive, j], qw[j], pw[j], guesses[alive], Q0[alive],
-                         P0[alive], bases)
+                         P0[alive], bases, [None if pred[i] is None else pred[i][j]
+                                            for i in alive])
         for i, b in zip(alive, bases, strict=True):
             tracks[i].base = b
         keep = []
         for a, (i, r) in enumerate(zip(alive, res, strict=True)):
-            tracks[i].statuses[r.status] = tracks[i].statuses.get(r.status, 0) + 1
-            worst[i] = max(worst[i], r.residual)
+            statuses = tracks[i].statuses
+            statuses[r.status] = statuses.get(r.status, 0) + 1
+            if r.residual > worst[i]:
+                worst[i] = r.residual
             if not r.success:
                 fail[i] = (j, r)
                 continue
@@ -272,10 +285,9 @@ def _implicit_cycles(solver, c, tracks, qw, pw, load, lam):
             st[i, j + 1], act[i, j], guesses[i] = r.states, r.active_set, r.active_set
             scales[i, j] = r.force_scale
             if j + 1 < n_steps:
-                Q0[i], P0[i] = solver.next_base(r.q, r.p, r.gap, qw[j + 1] - qw[j],
-                                                pw[j + 1] - pw[j])
-        alive = alive[keep]
-        if not alive.size:
+                Q0[i], P0[i] = solver.next_base(r.q, r.p, r.gap, dqw[j], dpw[j])
+        alive = [alive[a] for a in keep]
+        if not alive:
             break
     recs = []
     for i in range(k):
@@ -290,6 +302,8 @@ def _implicit_cycles(solver, c, tracks, qw, pw, load, lam):
         w_i, msg = _check_period(solver, c, V[i], Wg[i], Q[i], P[i], qw, pw, scales[i],
                                  worst[i])
         t = c - 1 + np.arange(n_steps + 1) / n_steps
+        if not msg:
+            tracks[i].last_act = act[i]
         recs.append(CycleRecord(t, V[i], Wg[i], Q[i], P[i], st[i], Wd[i], active_sets=act[i],
                                 n_steps=n_steps, max_residual=w_i, ok=not msg, message=msg))
     return recs

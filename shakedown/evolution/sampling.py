@@ -140,8 +140,9 @@ def _settle_at_extremes(system, load, lam, n_samples, v, error, force_scale, tol
     the exact load at ``t*``.  Repeating this for the worst constraint until every exact margin
     holds gives a state that provably stays stuck under the exact load at all times; what the
     sampling error affected is then only the final state (by the slips of these steps), not the
-    verdict.  If a step opens a gap, fails, or the rounds run out (``4 N + 4``), the verdict is
-    not decided (``within = True``).
+    verdict.  If a step opens a gap, fails, leaves the state where it was (a fixed point: the
+    rounds would repeat it) or the rounds run out (``4 N + 4``), the verdict is not decided
+    (``within = True``).
     """
     n = system.n_nodes
     rounds = 4 * n + 4 if max_rounds is None else max_rounds
@@ -149,6 +150,7 @@ def _settle_at_extremes(system, load, lam, n_samples, v, error, force_scale, tol
     cur = v0.copy()
     f = system.friction
     minima = (load.periodic_min(-1.0, f), load.periodic_min(1.0, f))  # state-independent
+    done, why = rounds, ""
     for k in range(rounds + 1):
         mI, tI, mII, tII = _exact_margins(system, load, lam, cur, minima)
         margins = np.minimum(mI, mII)
@@ -169,6 +171,13 @@ def _settle_at_extremes(system, load, lam, n_samples, v, error, force_scale, tol
         q_w, p_w = load.evaluate(t_star, lam)
         r = solver.solve(cur, q_w, p_w, None)
         if not r.success or np.any(r.gap != 0):
+            done, why = k + 1, "; the last step failed or opened a gap"
+            break
+        if np.array_equal(r.slip, cur):
+            # the step leaves the state where it was (the violation is within the step's own
+            # tolerance): a fixed point, every further round would repeat this one (issue 25:
+            # up to 4 N + 4 identical step solves saved)
+            done, why = k + 1, "; the last step left the state where it was"
             break
         cur = np.asarray(r.slip, float)
     which = "I" if mI[worst] <= mII[worst] else "II"
@@ -176,7 +185,7 @@ def _settle_at_extremes(system, load, lam, n_samples, v, error, force_scale, tol
         f"shook down on the load sampled at {n_samples} points per period, but the exact load "
         f"breaks constraint {which}_{worst + 1} by {-margins[worst]:.3g} "
         f"({-margins[worst] / force_scale:.2g} of the force scale) even after slipping at its "
-        f"extreme times ({rounds} rounds): the verdict lies within the load's sampling error "
+        f"extreme times ({done} round(s){why}): the verdict lies within the load's sampling error "
         f"({error:.3g}) and this run cannot decide it. The bounds can: above lam2 of the exact "
         "load no state stays stuck (cyclic slip from every initial state)"))
 

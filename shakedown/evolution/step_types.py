@@ -95,6 +95,35 @@ class StepResult:
     n_solutions: int = -1
     alternative_slips: tuple = field(default=(), repr=False)
 
+    def __repr__(self) -> str:
+        from ..model.results import short_repr
+
+        names = np.asarray(self.state_names)
+        return short_repr(self, ("status", "success", "method", "iterations", "residual"),
+                          {"n_nodes": int(names.size),
+                           "n_slip": int(np.count_nonzero((names != "stick")
+                                                          & (names != "separation"))),
+                           "n_open": int(np.count_nonzero(names == "separation"))})
+
+    def verdict(self) -> str:
+        """The step's answer in one sentence: its status, which nodes slip or open (numbered
+        from 1), and its verified residual."""
+        from ..model.numbers import sig
+
+        if not self.success:
+            return f"The step has no verified answer ({self.status}): {self.message}."
+        names = np.asarray(self.state_names)
+        parts = []
+        for name in dict.fromkeys(names[names != "stick"]):
+            nodes = np.flatnonzero(names == name) + 1
+            shown = ", ".join(map(str, nodes[:8])) + (", ..." if nodes.size > 8 else "")
+            word = {"forward": "slip forward", "backward": "slip backward",
+                    "separation": "open"}.get(str(name), str(name))
+            parts.append(f"{nodes.size} {word} (node{'s' * (nodes.size > 1)} {shown})")
+        what = "; ".join(parts) if parts else "every node sticks"
+        return (f"Step answer ({self.status}): {what}; residual {sig(self.residual)} (relative to the "
+                f"force scale {sig(self.force_scale)}).")
+
     @property
     def state_names(self) -> np.ndarray:
         """``states`` as strings (:data:`STATE_NAMES`)."""

@@ -45,6 +45,31 @@ class CriticalFriction:
     method: str
     well_posed: bool
 
+    def __repr__(self) -> str:
+        from .results import short_repr
+
+        return short_repr(self, ("factor", "value", "exact", "upper_bound", "method",
+                                 "well_posed"))
+
+    def verdict(self) -> str:
+        """Whether every implicit step has a unique answer, in one or two sentences (numbers to 4
+        significant digits; ``factor`` exact or a sufficient bound, ``upper_bound`` necessary)."""
+        from .numbers import sig
+
+        kind = "exact" if self.exact else "a sufficient bound"
+        if self.well_posed:
+            return (f"Every implicit step has a unique answer: the friction is below critical "
+                    f"(critical multiplier of the friction profile alpha_c = {sig(self.factor)} "
+                    f"> 1, {kind}; {self.method}).")
+        if self.exact or self.upper_bound <= 1.0:
+            bound = (f"alpha_c = {sig(self.factor)}, exact" if self.exact else
+                     f"alpha_c <= {sig(self.upper_bound)}, a necessary bound")
+            return (f"Steps may have several answers: the friction is at or above critical "
+                    f"({bound}; {self.method}).")
+        return (f"Uniqueness of the steps is not guaranteed: the sufficient bound alpha_c >= "
+                f"{sig(self.factor)} is not above 1, and the necessary bound alpha_c <= "
+                f"{sig(self.upper_bound)} does not decide it ({self.method}).")
+
     def __str__(self) -> str:
         kind = "exact" if self.exact else "sufficient bound"
         return (

@@ -242,6 +242,24 @@ class SweepResult:
                     wall_seconds=self.wall_seconds)
 
 
+#: Estimated work (runs x nodes^2) below which a study runs in this process by default: the
+#: built-in default study (144 runs of 100 cracks: 1.44e6) costs about 3 s of CPU in its runs
+#: with the compiled kernel, while each worker process costs about 2.5 s of CPU to start (its
+#: imports), so for studies up to a few times that size the pool costs more than it saves
+#: (``benchmarks/RESULTS_first_run.md``, issue 25).
+SMALL_STUDY = 4.0e6
+
+
+def auto_workers(spec: SweepSpec) -> int:
+    """The default number of local worker processes of ``spec``'s study: 1 (this process) when
+    its estimated work (runs x nodes^2) is below :data:`SMALL_STUDY`, else every core."""
+    n = spec.source.n_nodes if spec.source is not None else spec.n_cracks
+    n_lams = len(spec.lams) if spec.lams != "auto" else (
+        spec.n_lams + spec.n_band + spec.n_adj + spec.n_refine)
+    work = float(spec.n_realisations) * n_lams * spec.n_states * float(n) ** 2
+    return 1 if work < SMALL_STUDY else int(os.cpu_count() or 1)
+
+
 def run_sweep(spec: SweepSpec, store, *, n_workers: int | None = None, scheduler=None,
               progress: bool = True, format: str | None = None,
               confidence: float = 0.95) -> SweepResult:
@@ -255,8 +273,8 @@ def run_sweep(spec: SweepSpec, store, *, n_workers: int | None = None, scheduler
         ``refined/`` (Parquet parts or CSV files).  A folder made by another spec is refused;
         rerunning with the same spec resumes.
     n_workers : int, optional
-        Local processes (one BLAS thread each); default ``os.cpu_count()``.  Ignored with
-        ``scheduler``.
+        Local processes (one BLAS thread each); default :func:`auto_workers` (this process
+        for a small study, else ``os.cpu_count()``).  Ignored with ``scheduler``.
     scheduler : str or distributed.Client, optional
         Dask scheduler address: run the tasks on that cluster (trusted like code).
     progress : bool
@@ -276,7 +294,7 @@ def run_sweep(spec: SweepSpec, store, *, n_workers: int | None = None, scheduler
     t0 = time.perf_counter()
     store = make_folder(store, "store")
     _check_spec_file(store / "spec.json", spec)
-    n_workers = int(n_workers or os.cpu_count() or 1)
+    n_workers = int(n_workers or auto_workers(spec))
     sub = (lambda name: store / f"{name}.csv") if format == "csv" else (lambda name: store / name)
     done = []
     with Workers(n_workers, scheduler) as workers:  # one pool for every phase

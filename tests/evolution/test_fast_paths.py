@@ -296,3 +296,67 @@ def test_critical_friction_once_per_system(monkeypatch):
     s2 = s.with_friction(0.5 * s.friction)
     assert s2.critical_friction().factor == pytest.approx(2 * first.factor, rel=1e-12)
     assert len(calls) == 2
+
+
+# ------------------------------------------------ issue 25: the Python step's shortcuts
+FIELDS = ("slip", "gap", "slip_increment", "q", "p", "states", "active_set")
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_stick_step_equals_the_general_step(seed):
+    """An all-stick guess that holds is answered without the active-set machinery
+    (``StepSolver._stick_step``): the same fields as the general path (``verify=True`` takes
+    it), bit for bit; a guess whose signs fail goes the general way (the answer slips)."""
+    rng = np.random.default_rng(seed)
+    n = 8
+    s = coupled(rng, n)
+    solver = StepSolver(s, kernel=False)
+    v = 0.01 * rng.normal(size=n)
+    f = float(s.friction.max())
+    p_w = np.full(n, 1.0)
+    for amp, sticks in ((0.05 * f, True), (5.0 * f, False)):
+        q_w = amp * rng.uniform(-1.0, 1.0, n) - s.A @ v
+        fast = solver.solve(v, q_w, p_w, np.zeros(n, np.int8), verify=False)
+        ref = StepSolver(s, kernel=False).solve(v, q_w, p_w, np.zeros(n, np.int8))
+        assert fast.success and ref.success and fast.status == ref.status == "unique"
+        assert (not np.any(fast.active_set)) is sticks
+        for name in FIELDS:
+            assert np.array_equal(getattr(fast, name), getattr(ref, name)), name
+        assert fast.complementarity_residual == pytest.approx(ref.complementarity_residual,
+                                                              rel=1e-12, abs=1e-300)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_predicted_assignments_change_no_answer(seed, monkeypatch):
+    """The previous period's assignments tried first (``StepSolver._probe``, accepted only
+    strictly inside their checks): the runs equal those without the probe (discrete outcomes
+    exactly, dissipation and slips to round-off), and the probe was used."""
+    rng = np.random.default_rng(100 + seed)
+    n = 6
+    s = coupled(rng, n)
+    load = harmonic_load(rng, s)
+    V0 = 0.2 * rng.normal(size=(2, n))
+    opts = dict(steps_per_cycle=32, max_cycles=40)
+    accepted = []
+    probe = StepSolver._probe
+
+    def counting(self, *args):
+        out = probe(self, *args)
+        accepted.append(out is not None)
+        return out
+
+    monkeypatch.setattr(StepSolver, "_probe", counting)
+    runs = [sd.solve_cycles(s, load, 1.5, initial_slip=v0, **opts,
+                            solver=StepSolver(s, kernel=False))
+            for v0 in V0]
+    assert sum(accepted) > 0
+    monkeypatch.setattr(StepSolver, "_probe", lambda self, *args: None)
+    refs = [sd.solve_cycles(s, load, 1.5, initial_slip=v0, **opts,
+                            solver=StepSolver(s, kernel=False))
+            for v0 in V0]
+    for a, b in zip(runs, refs, strict=True):
+        assert (a.status, a.period, a.cycles_to_steady, a.shook_down) == (
+            b.status, b.period, b.cycles_to_steady, b.shook_down)
+        assert a.steady_dissipation == pytest.approx(b.steady_dissipation, rel=1e-9, abs=1e-12)
+        scale = a.force_scale / s.A.diagonal().min()
+        assert np.max(np.abs(a.final_slip - b.final_slip)) <= 1e-8 * scale

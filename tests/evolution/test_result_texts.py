@@ -118,3 +118,64 @@ def test_uniqueness_summary_numbers_stuck_nodes_from_1():
                                 steps_per_cycle=p.steps_per_cycle, max_cycles=200)
     assert set(study.table["stuck"]) == {"1"}
     assert "stuck sets seen (nodes numbered from 1): {2}" in study.summary()
+
+
+# ------------------------------------------------------- issue 25: the result types left
+ROTATING = sd.DiscreteSystem(2.0 * np.eye(2), np.zeros((2, 1)), [[1.0]], friction=0.5, dim=3)
+ROTATING_LOAD = sd.LoadCycle.from_harmonics(q0=np.zeros((1, 2)), p0=[1.0], q_cos=[[1.3, 0.0]],
+                                            q_sin=[[0.0, 1.3]])
+
+
+def test_three_dimensional_bounds_and_runs_repr_and_verdict():
+    b = sd.shakedown_bounds(ROTATING, ROTATING_LOAD)
+    text = _short(b, "ConeBounds")
+    # one node, k = 2, c = 1, f = 0.5, P = 1, |Q| = 1.3: lam2 = f P / |Q| * (A/A) = 0.3846
+    assert "status='bounded'" in text and "lam2=0.3846" in text and "safe_state" not in text
+    assert b.verdict().startswith("No safe state above lam2 = 0.3846")
+    run = sd.solve_cycles(ROTATING, ROTATING_LOAD, 1.0, steps_per_cycle=32)
+    assert "status='periodic'" in _short(run, "CycleRun") and "n_nodes=1" in repr(run)
+    assert run.verdict().startswith("At lam = 1.000, cyclic slip: W = ")
+
+
+def test_critical_friction_repr_and_verdict():
+    c = SYSTEM.critical_friction()
+    assert "well_posed=True" in _short(c, "CriticalFriction")
+    assert c.verdict().startswith("Every implicit step has a unique answer: the friction is "
+                                  f"below critical (critical multiplier of the friction profile "
+                                  f"alpha_c = {c.factor:.4g}")
+    bad = SYSTEM.with_friction(5.0).critical_friction()
+    assert not bad.well_posed and bad.verdict().startswith("Steps may have several answers")
+
+
+def test_step_results_repr_and_verdict_2d_and_3d():
+    r = sd.solve_step(SYSTEM, [0.0, 0.0], [0.9, -0.2], [1.0, 1.0])
+    text = _short(r, "StepResult")
+    assert "status='unique'" in text and "n_slip=1" in text and "(slip=" not in text
+    assert r.verdict() == ("Step answer (unique): 1 slip backward (node 1); residual 0 "
+                           "(relative to the force scale 1.000).")
+    from shakedown.evolution.cone_step import ConeStepSolver
+
+    r3 = ConeStepSolver(ROTATING).solve(np.zeros((1, 2)), np.array([[2.0, 0.0]]),
+                                         np.array([1.0]))
+    assert "n_slip=1" in _short(r3, "ConeStepResult")
+    assert r3.verdict().startswith("Step answer (") and "1 slip (node 1)" in r3.verdict()
+
+
+def test_fretting_results_repr_and_verdict():
+    from shakedown.models.half_space import continuum as cont
+    from shakedown.models.half_space.bounds import fretting_lam2
+    from shakedown.models.half_space.normal import normal_contact
+
+    E, nu, R, P, f = 1.0, 0.3, 1.0, 1e-3, 0.5
+    a = float(cont.hertz_radius(P, R, E / (2 * (1 - nu**2))))
+    m = sd.half_space_model(radius=R, n_cells=9, width=2.4 * a, friction=f,
+                            materials=((E, nu), (E, nu)))
+    nc = normal_contact(m, P)
+    assert "n_contact_cells=" in _short(nc, "NormalContact")
+    assert nc.verdict().startswith("Normal contact: ") and "carry P = 0.001000 [force]" in \
+        nc.verdict()
+    res = fretting_lam2(m, P, 0.3 * f * P)
+    text = _short(res, "FrettingLam2")
+    assert "node_lam" not in text and f"critical_cell={res.critical_cell}" in text
+    assert res.verdict().startswith(f"No safe state above lam2 = {res.lam2:.4g}"[:26])
+    assert f"set by cell {res.critical_cell + 1}," in res.verdict()

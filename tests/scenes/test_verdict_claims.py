@@ -114,6 +114,34 @@ def test_settling_steps_end_in_a_state_stuck_under_the_exact_load():
     assert np.max(np.abs(r.slip - run.final_slip)) <= 10 * run.sampling_error
 
 
+def test_settling_stops_at_a_fixed_point_with_the_same_verdict():
+    # issue 25: a settling step that leaves the state where it was (the exact load's violation
+    # within the step's own tolerance) would repeat itself for all 4 N + 4 rounds: the check
+    # stops after it, undecided, and says why (the default study did 3636 such steps)
+    from shakedown.evolution.complementarity import StepSolver
+    from shakedown.evolution.sampling import _settle_at_extremes
+
+    class Counting(StepSolver):
+        calls = 0
+
+        def solve(self, *args, **kwargs):
+            Counting.calls += 1
+            return super().solve(*args, **kwargs)
+
+    s = coupled(0.4)
+    run = sd.solve_cycles(s, LOAD, 0.6)
+    F = run.force_scale
+    loose = Counting(s, feas_tol=1e-3)  # its steps accept the exact load's 3e-5 F violation
+    chk = _settle_at_extremes(s, LOAD, 0.6, 200, run.final_slip, run.sampling_error, F,
+                              1e-10 * F, loose)
+    assert Counting.calls == 1 and chk.within
+    assert "1 round(s); the last step left the state where it was" in chk.message
+    # with the solver's own tolerance the same start is settled (the fixed point was the
+    # tolerance's, not the state's)
+    assert not _settle_at_extremes(s, LOAD, 0.6, 200, run.final_slip, run.sampling_error, F,
+                                   1e-10 * F, StepSolver(s)).within
+
+
 def test_unsettled_shakedown_is_decided_by_the_bounds_and_the_decision_is_right():
     s = coupled(0.7)
     b = sd.shakedown_bounds(s, LOAD)

@@ -194,3 +194,9 @@ class ConeBounds:
         if self.message:
             lines.append(f"  note: {self.message}")
         return "\n".join(lines)
+
+    def __repr__(self) -> str:
+        from ...model.results import short_repr
+
+        return short_repr(self, ("status", "lam2", "lam2_lower", "lam2_upper", "lam_adj_cone",
+                                 "facets", "safe_lam", "n_socps", "n_cuts", "n_nodes"))

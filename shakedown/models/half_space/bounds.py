@@ -73,6 +73,26 @@ class FrettingLam2:
     cg_iterations: int
     residual: float
 
+    def __repr__(self) -> str:
+        from ...model.results import short_repr
+
+        return short_repr(self, ("lam2", "critical_cell", "cg_iterations", "residual"),
+                          {"n_contact_cells": int(np.count_nonzero(self.contact))})
+
+    def verdict(self) -> str:
+        """Melan's limit of the fretting load in one or two sentences (cells numbered from 1)."""
+        from ...model.numbers import sig
+
+        n = int(np.count_nonzero(self.contact))
+        if not np.isfinite(self.lam2):
+            return (f"No contact cell limits the tangential load ({n} cells in contact): "
+                    "lam2 = inf, a safe state exists at every load factor.")
+        return (f"No safe state above lam2 = {sig(self.lam2)} (the tangential amplitudes "
+                f"Q_x, Q_y times lam2, Melan's limit on the friction cones of the {n} contact "
+                f"cells; set by cell {int(self.critical_cell) + 1}, bonded tractions to a "
+                f"relative residual {sig(self.residual)}): cyclic slip from every initial state "
+                "there.")
+
 
 def bonded_tractions(model, contact, ops=None, rtol: float = 1e-12, maxiter: int = 5000):
     """Bonded tractions of a unit ``Q_x`` and ``Q_y`` on the cells ``contact`` (1), by CG.

@@ -50,6 +50,22 @@ class NormalContact:
         """Cells in contact (``p > 0``), boolean (n^2,)."""
         return self.p > 0
 
+    def __repr__(self) -> str:
+        from ...model.results import short_repr
+
+        return short_repr(self, ("approach", "iterations", "residual"),
+                          {"n_contact_cells": int(np.count_nonzero(self.contact)),
+                           "P": float(np.sum(self.p))})
+
+    def verdict(self) -> str:
+        """The normal contact in one sentence."""
+        from ...model.numbers import sig
+
+        return (f"Normal contact: {int(np.count_nonzero(self.contact))} of {self.p.size} cells "
+                f"carry P = {sig(float(np.sum(self.p)))} [force] at the approach "
+                f"d = {sig(self.approach)} [length] (complementarity residual "
+                f"{sig(self.residual)}, {self.iterations} iterations).")
+
 
 def _zz_operator(model):
     n = model.n

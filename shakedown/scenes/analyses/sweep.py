@@ -13,8 +13,9 @@ files, FE, half-plane, a crack set from a file, ...) is the scene's one built sy
 (:class:`~shakedown.studies.spec.SystemSource`), with ``W`` in its energy unit.  Rows are
 appended to ``sweep_store/`` in the output folder as they arrive: the same command run again
 resumes an interrupted sweep (``fresh = true`` starts over; a store that is a symbolic link is
-refused).  Realisations and initial states are numbered from 1 in the CSV/Parquet/JSON tables
-and on stdout (the store keeps the 0-based indices of the Python API).
+refused).  Realisations, initial states and load factors (``lam_index``) are numbered from 1
+in the CSV/Parquet/JSON tables and on stdout (the store keeps the 0-based indices of the Python
+API).
 
 Writes ``sweep_runs.csv`` (and ``.parquet``), ``sweep_summary.csv`` (min / max ``W*`` per
 realisation and ``lam``), ``sweep_regions.csv`` (runs in cyclic slip per band of load factors),
@@ -59,7 +60,8 @@ OPTIONS = {
     "max_cycles": (int, 200, "cycles before a run is declared not steady"),
     "tol": (float, 1e-10, "steady-state tolerance of the cyclic solver"),
     "stress_scale": (float, 0.0, "p0 of W* (0: max |static stress|)"),
-    "n_workers": (int, 0, "local worker processes (0: every core)"),
+    "n_workers": (int, 0, "local worker processes (0: this process for a small study, else "
+                          "every core)"),
     "scheduler": (str, "", "Dask scheduler address (command line or SHAKEDOWN_SCHEDULER only)"),
     "store_format": (str, "parquet", "'parquet' or 'csv' store (sweep_store/ in the output)"),
     "fresh": (bool, False, "discard a previous sweep_store instead of resuming it"),
@@ -188,7 +190,7 @@ def run(ctx, options: dict) -> dict:
     ctx.output.write_table("sweep_bands.csv", res.bands)
     digest = res.to_dict()
     for key in ("realisations", "summary", "regions"):  # numbered from 1, as the CSV tables
-        digest[key] = [{**r, **{c: int(r[c]) + 1 for c in ("realisation", "state") if c in r}}
+        digest[key] = [{**r, **{c: int(r[c]) + 1 for c in ONE_BASED if c in r}}
                        for r in digest[key]]
     ctx.output.write_json("sweep.json", digest)
     ctx.output.write_text("sweep_verdict.txt", res.verdict + "\n")
@@ -235,11 +237,15 @@ def run(ctx, options: dict) -> dict:
     }
 
 
+#: Columns of the study's tables counted from 0 in the API and from 1 in its files.
+ONE_BASED = ("realisation", "state", "lam_index")
+
+
 def _from_one(table):
-    """A copy of a sweep table with realisations and initial states numbered from 1 (columns
-    ``realisation``, ``state``), as on stdout and in everything a person reads."""
+    """A copy of a sweep table with realisations, initial states and load factors numbered
+    from 1 (columns :data:`ONE_BASED`), as on stdout and in everything a person reads."""
     t = table.copy()
-    for col in ("realisation", "state"):
+    for col in ONE_BASED:
         if col in t:
             t[col] = t[col].astype(int) + 1
     return t
