@@ -202,17 +202,22 @@ class BarycentricWalk:
         return out
 
     def _vertex(self):
-        """The current vertex in ``v``: ``x* - E_P sigma_P``."""
-        return self.f.x2 - self.sP @ self.f.ET[self.P]
+        """The coordinates ``sigma`` of the current vertex (length ``N + 1``, zero outside
+        ``P``); :meth:`_flush` maps a batch of them to ``v``."""
+        sigma = np.zeros(self.n + 1)
+        sigma[self.P] = self.sP
+        return sigma
 
     def _flush(self) -> bool:
-        """Check the buffered vertices in ``v`` (one product ``G X``); their tight rows join
-        ``covered``.  ``False`` if the last one fails (the walk then stops as broken; an
-        earlier one that fails only adds nothing)."""
-        X, self._buffer = self._buffer, []
-        if not X:
+        """Check the buffered vertices in ``v`` (one product with ``E^T`` maps them, ``v = x* -
+        E sigma``, one product ``G X`` checks them); their tight rows join ``covered``.
+        ``False`` if the last one fails (the walk then stops as broken; an earlier one that
+        fails only adds nothing)."""
+        S, self._buffer = self._buffer, []
+        if not S:
             return True
-        _, tights = batch_check(self.G, self.b, X)
+        V = self.f.x2 - np.vstack(S) @ self.f.ET  # (batch, N): one GEMM, no gather of E_P
+        _, tights = batch_check(self.G, self.b, list(V))
         for tight in tights:
             if tight is not None:
                 self.covered |= tight

@@ -327,3 +327,37 @@ def test_answers_are_shared_only_when_the_basis_proves_them():
     out, done = np.full(4, np.nan), np.zeros(4, bool)
     _share(ans3, 0, groups, by_row, out, done, "min", lam_row=3)
     assert list(done) == [True, False, True, True] and np.all(out[done] == 0.0)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_vectorised_sharing_follows_the_same_rule(seed):
+    """``_share`` on one-row groups (the interval LPs) uses an index array instead of a loop
+    over the basis (``_by_row``'s ``"single"``): on random bases, multipliers (none, one or
+    several negative), answered groups and ``min`` / ``max`` it decides exactly what the loop
+    decides."""
+    from shakedown.bounds.dense_path import _by_row, _share
+
+    rng = np.random.default_rng(seed)
+    R = 40
+    for trial in range(60):
+        rows = rng.choice(R - 1, size=rng.integers(1, R - 1), replace=False)
+        groups = [(int(r),) for r in rows]
+        fast = _by_row(groups, R)
+        assert "single" in fast
+        slow = {k: v for k, v in fast.items() if k != "single"}
+        T = rng.choice(R, size=12, replace=False)
+        if trial % 3 == 0:
+            T[0] = R - 1  # the row lam >= 0 basic
+        y = np.abs(rng.standard_normal(R))
+        y[rng.choice(T, size=int(rng.integers(0, 3)), replace=False)] *= -1.0
+        sense = "min" if trial % 2 else "max"
+        lam = 0.0 if sense == "min" and trial % 3 == 0 else 0.4
+        ans = dense_lp.DenseAnswer("optimal", np.array([0.1, lam]), y, T, 1, (0.0,) * 4)
+        done0 = rng.random(len(groups)) < 0.3
+        res = []
+        for by_row in (fast, slow):
+            out, done = np.full(len(groups), np.nan), done0.copy()
+            _share(ans, 0, groups, by_row, out, done, sense, lam_row=R - 1)
+            res.append((out, done))
+        np.testing.assert_array_equal(res[0][1], res[1][1])
+        np.testing.assert_array_equal(res[0][0], res[1][0])
