@@ -175,9 +175,17 @@ def shakedown_bounds(
         out = solve_highs(ch, load.has_periodic_part, intervals, adjacency, separation,
                           log=StageLog() if dense else log, reason=log.handover)
         out.stages = tuple(tried) + tuple(out.stages)  # the dense attempt, then the HiGHS path
-    log.finish()
     lf = sc.load_factor
     lam1, lam2 = out.lam1 * lf, out.lam2 * lf
+    # safe state at the chosen lam: Chebyshev centre of H(lam), a stage of its own (issue 26)
+    if lam is None:
+        safe_lam = 0.5 * lam1 if np.isfinite(lam1) and lam1 > 0 else 0.0
+    else:
+        safe_lam = lam
+    log.start("safe_state")
+    v_hat, r_hat = _chebyshev(ch, safe_lam / lf, solver, log)
+    log.finish()
+    out.stages = tuple(out.stages) + log.records()[-1:]
     lam_sep = out.lam_sep * lf
     messages = list(out.messages)
     fallbacks = sum(st.fallbacks for st in out.stages)
@@ -191,13 +199,6 @@ def shakedown_bounds(
             f"at node(s) {[j + 1 for j in out.sep_nodes]}")
     elif separation and np.isnan(out.lam_sep) and out.status != "infeasible":
         messages.append("no safe state keeps every node in compression, even at lam = 0")
-
-    # safe state at the chosen lam: Chebyshev centre of H(lam)
-    if lam is None:
-        safe_lam = 0.5 * lam1 if np.isfinite(lam1) and lam1 > 0 else 0.0
-    else:
-        safe_lam = lam
-    v_hat, r_hat = _chebyshev(ch, safe_lam / lf, solver)
     return ShakedownBounds(
         lam1=float(lam1),
         lam2=float(lam2),
@@ -240,8 +241,10 @@ def chebyshev_centre(cs: ConstraintSet, lam: float, *, solver: str = "auto"):
     return v_hat * sc.slip, float(r_hat * sc.slip)
 
 
-def _chebyshev(cs: ConstraintSet, lam: float, solver: str):
-    """Chebyshev centre of a nondimensional constraint set (see :func:`chebyshev_centre`)."""
+def _chebyshev(cs: ConstraintSet, lam: float, solver: str, log=None):
+    """Chebyshev centre of a nondimensional constraint set (see :func:`chebyshev_centre`);
+    ``log`` (:class:`~.provenance.StageLog`) counts the LP (dense, or HiGHS with the reason
+    when the dense answer was not certified)."""
     n = cs.n_nodes
     b = cs.offsets(lam)
     if sp.issparse(cs.G):
@@ -261,9 +264,12 @@ def _chebyshev(cs: ConstraintSet, lam: float, solver: str):
         if ans is not None and ans.status != "optimal":
             ans = None
         if ans is not None:
+            if log is not None:
+                log.dense()
             if ans.x[-1] < 0:
                 return np.zeros(0), -np.inf
             return ans.x[:n], float(ans.x[-1])
+    t0 = time.perf_counter()
     lp = ReusableLP(
         rows,
         np.full(2 * n, -np.inf),
@@ -273,6 +279,9 @@ def _chebyshev(cs: ConstraintSet, lam: float, solver: str):
         np.concatenate([np.zeros(n), [1.0]]),
     )
     ans = lp.solve()
+    if log is not None:
+        log.highs(time.perf_counter() - t0, "centre not certified by the interior point or its "
+                  "crossover" if solver == "auto" else None)
     if ans.status != "optimal" or ans.x[-1] < 0:
         return np.zeros(0), -np.inf
     return ans.x[:n], float(ans.x[-1])

@@ -172,9 +172,10 @@ def test_stages_drive_the_progress_display():
             yield item
 
     b = sd.shakedown_bounds(system, load, progress=progress)
-    assert seen[0] == (5, "shakedown bounds")
-    assert seen[1:] == ["lam2", "lam_low", "lam_high", "adjacency", "separation"]
+    assert seen[0] == (6, "shakedown bounds")
+    assert seen[1:] == ["lam2", "lam_low", "lam_high", "adjacency", "separation", "safe_state"]
     assert [s.stage for s in b.stages][:3] == ["lam2", "lam_low", "lam_high"]
+    assert b.stages[-1].stage == "safe_state" and b.stages[-1].dense_lps == 1
     assert b.to_dict()["stages"][0]["stage"] == "lam2"
 
 
@@ -197,3 +198,67 @@ def test_a_highs_lp_that_stops_without_an_answer_is_not_read_as_infeasible(monke
         sd.shakedown_bounds(system, load)
     with pytest.raises(SolverError):
         sd.shakedown_bounds(system, load, solver="highs")
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_finish_from_a_feasible_basis_with_a_slightly_negative_multiplier(seed):
+    """Issue 26 (FE strip, seed 5017): HiGHS's optimal ``lam2`` basis is primal feasible in the
+    dense coordinates, its smallest multiplier ``-1.2e-8`` of the largest: inside CERT_TOL, not
+    dual feasible to 1e-9, and it was refused without a primal pivot.  Here such a basis is
+    made by tilting the objective of an optimal one; the finish must end at HiGHS's optimum
+    of the tilted LP, certified."""
+    A, b, e = random_lp(8, 30, seed)
+    ans, tab = dense_lp.solve_max(A, b, e)
+    T = np.sort(ans.basis)
+    B = A[T] / np.linalg.norm(A[T], axis=1)[:, None]
+    y = np.linalg.solve(B.T, e)
+    j = int(np.argmax(y))
+    e2 = e - (y[j] + 3e-8 * np.abs(y).max()) * B[j]  # y_j -> -3e-8 |y|, the rest unchanged
+    tab2 = dense_lp.Tableau(A, b, e2, T)
+    assert not tab2.dual_feasible and tab2.y0.min() > -1e-7 * np.abs(tab2.y0).max()
+    assert np.all(tab2.act0 <= tab2.b + 1e-12)  # primal feasible
+    got, out = dense_lp.finish_from(A, b, e2, tab2)
+    assert got is not None and got.status == "optimal" and out.dual_feasible
+    # (HiGHS at its default dual tolerance 1e-7 stops at the tilted basis itself: tightened)
+    from shakedown.bounds.lp import ReusableLP
+
+    lp = ReusableLP(A, np.full(len(b), -np.inf), b, np.full(8, -np.inf), np.full(8, np.inf), e2)
+    for opt in ("primal_feasibility_tolerance", "dual_feasibility_tolerance"):
+        lp._h.setOptionValue(opt, 1e-10)
+    ref = lp.solve()
+    assert e2 @ got.x == pytest.approx(ref.objective, rel=1e-9)
+    assert e2 @ got.x > e2 @ tab2.x0 + 1e-10  # (the tilted basis itself is not the optimum)
+    assert max(dense_lp.kkt_residuals(A, b, e2, got.x, got.y)) <= dense_lp.CERT_TOL
+
+
+def test_a_safe_state_fallback_is_recorded_and_costly_ones_are_said(monkeypatch):
+    """Issue 26: the safe state (Chebyshev centre) took 30 s of a 32 s computation on FE
+    strips, outside every stage.  It is now the stage ``safe_state``: dense when certified;
+    forced to fail here, HiGHS with its reason, counted as a fallback, in the message, and in
+    the verdict when it cost more than the rest.  The centre is HiGHS's; the dense one is
+    certified within ``CENTRE_RTOL`` below it."""
+    from test_bounds import random_problem
+
+    from shakedown.bounds import engine
+
+    system, load = random_problem(40, 1)
+    ref = sd.shakedown_bounds(system, load)
+    st = ref.stages[-1]
+    assert st.stage == "safe_state" and st.path == "dense" and st.fallbacks == 0
+    assert ref.lam1 > 0 and ref.safe_margin > 0
+    real = dense_lp.solve_max
+
+    def no_centre(A, b, e, **kw):  # the centre LP's interior point and crossover fail
+        return (None, None) if kw.get("interior") else real(A, b, e, **kw)
+
+    monkeypatch.setattr(dense_lp, "solve_max", no_centre)
+    b = sd.shakedown_bounds(system, load)
+    st = b.stages[-1]
+    assert (st.stage, st.path, st.highs_lps, st.fallbacks) == ("safe_state", "highs", 1, 1)
+    assert "centre not certified" in st.reasons[0] and "safe_state: 1" in b.message
+    assert b.lam2 == ref.lam2 and b.safe_lam == ref.safe_lam
+    r_h, r_d = b.safe_margin, ref.safe_margin
+    assert r_h * (1 - engine.CENTRE_RTOL) <= r_d <= r_h * (1 + 1e-9)
+    costly = dataclasses.replace(b, solve_time=1.5 * st.fallback_seconds).verdict()
+    assert "1 LP(s) (1 safe_state) could not be certified by the dense path" in costly
+    assert "HiGHS" not in dataclasses.replace(b, solve_time=10 * st.fallback_seconds).verdict()
