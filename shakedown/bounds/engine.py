@@ -229,7 +229,8 @@ def shakedown_bounds(
 
 def chebyshev_centre(cs: ConstraintSet, lam: float, *, solver: str = "auto"):
     """Centre [slip] and radius [slip] of the largest ball in ``H(lam)`` (``(empty, -inf)`` if
-    ``H`` is empty).
+    ``H`` is empty); the radius is exact for the centre returned and at most
+    :data:`CENTRE_RTOL` (relative) below the largest.
 
     The radius is capped at ``1e6`` times the problem's slip scale so that unbounded regions
     return a finite point.  ``solver="auto"`` tries the dense interior point (certified vertex)

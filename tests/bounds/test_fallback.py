@@ -262,3 +262,53 @@ def test_a_safe_state_fallback_is_recorded_and_costly_ones_are_said(monkeypatch)
     costly = dataclasses.replace(b, solve_time=1.5 * st.fallback_seconds).verdict()
     assert "1 LP(s) (1 safe_state) could not be certified by the dense path" in costly
     assert "HiGHS" not in dataclasses.replace(b, solve_time=10 * st.fallback_seconds).verdict()
+
+
+def _fe_strip_5017():
+    """The FE strip of ``benchmarks/bench_bounds_realizations.py`` (``--kind fe``, N = 500,
+    realization 17, seed 5017), where issue 26's cliff was found on FE strips."""
+    from shakedown import fe
+
+    rng = np.random.default_rng(5017)
+    friction = float(rng.uniform(0.3, 0.9))
+    shear, press, rot = rng.uniform(0.2, 0.6), rng.uniform(-0.3, 0.3), rng.uniform(0.0, 0.3)
+    loads = {"dead": fe.Traction("top", (0.0, -1.0)), "shear": fe.Traction("top", (1.0, 0)),
+             "press": fe.Traction("top", (0.0, 1.0))}
+    model = fe.FEModel(fe.rectangle(4.99, 0.1, 499, 8), fe.isotropic(1.0, 0.3),
+                       dirichlet={"left": "xy"}, contact=["bottom"], loads=loads,
+                       friction=friction)
+    cm = model.condense()
+    return cm.system, cm.load_cycle(static="dead", cyclic={"shear": shear, "press": press},
+                                    cyclic_sin={"shear": rot})
+
+
+def _farkas(b, rtol=1e-9):
+    cs, y = b.constraints, b.certificate
+    ys = np.abs(y).max()
+    assert y.min() >= -rtol * ys
+    assert np.abs(cs.G.T @ y).max() <= rtol * np.abs(cs.G).max() * ys
+    assert cs.c @ y / (-(cs.m @ y)) == pytest.approx(b.lam2, rel=rtol)
+    off = cs.offsets(b.lam2)
+    assert (cs.G @ b.state_at_lam2 - off).max() <= 1e-10 * np.abs(off).max()
+
+
+@pytest.mark.slow
+def test_fe_strip_5017_stays_dense_and_a_forced_lam2_failure_comes_back(monkeypatch):
+    """Issue 26, FE strip seed 5017 (500 contact nodes): the dense ``lam2`` LP was not
+    certified (37 strongly active rows, no non-singular basis among the rest; the completed
+    basis was never finished), HiGHS's optimal basis was refused in the dense coordinates (a
+    multiplier of -1.2e-8 of the largest: no primal pivot was tried), so all 1999 LPs went to
+    HiGHS: 79 s against 1.9 s.  Now every stage is dense; and with the dense ``lam2`` LP forced
+    to fail, HiGHS's basis comes back certified and only that LP falls back, same answer."""
+    system, load = _fe_strip_5017()
+    ref = sd.shakedown_bounds(system, load)
+    assert all(s.fallbacks == 0 and "highs" not in s.path for s in ref.stages)
+    assert ref.stages[0].path == "dense" and ref.stages[-1].stage == "safe_state"
+    _farkas(ref)
+    calls = _force_lam2_failure(monkeypatch)
+    b = sd.shakedown_bounds(system, load)
+    assert calls["lam2"] == 1 and len(calls["highs"]) == 1
+    assert [s.fallbacks for s in b.stages] == [1] + [0] * (len(b.stages) - 1)
+    assert b.lam2 == pytest.approx(ref.lam2, rel=1e-9) and b.lam1 == pytest.approx(ref.lam1,
+                                                                                  rel=1e-9)
+    _farkas(b)
