@@ -20,7 +20,7 @@ from test_lp import highs_max, random_lp
 import shakedown as sd
 from shakedown import dense_lp
 from shakedown.bounds import dense_path, highs_path
-from shakedown.bounds.provenance import StageRecord, costly_fallback
+from shakedown.bounds.provenance import STAGES, StageRecord, costly_fallback
 
 
 def _problem():
@@ -312,3 +312,15 @@ def test_fe_strip_5017_stays_dense_and_a_forced_lam2_failure_comes_back(monkeypa
     assert b.lam2 == pytest.approx(ref.lam2, rel=1e-9) and b.lam1 == pytest.approx(ref.lam1,
                                                                                   rel=1e-9)
     _farkas(b)
+
+
+@pytest.mark.parametrize("stage", STAGES)
+def test_the_verdict_names_a_costly_fallback_in_any_stage(stage):
+    system, load = _problem()
+    b = sd.shakedown_bounds(system, load)
+    others = tuple(_record(s, 0, 1.0, 0.0) for s in STAGES if s != stage)
+    costly = others + (_record(stage, 1, 7.0, 6.0),)
+    text = dataclasses.replace(b, stages=costly, solve_time=11.0).verdict()
+    assert f"1 LP(s) (1 {stage}) could not be certified" in text and "6 s of the 11 s" in text
+    cheap = others + (_record(stage, 1, 7.0, 5.0),)  # 5 s against 6 s for the rest
+    assert "HiGHS" not in dataclasses.replace(b, stages=cheap, solve_time=11.0).verdict()
