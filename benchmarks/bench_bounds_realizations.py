@@ -28,7 +28,11 @@ thread the CPU time is the time on one unshared core), peak RSS, ``lam1``,
 HiGHS of :func:`check_with_highs` (the ``lam2`` LP, the LP deciding ``lam1`` and three random
 rows' ``lam_high`` and ``lam_low``, each handed to HiGHS with the dense optimal basis as start
 and HiGHS's tolerances at 1e-9), each compared to 1e-9
-relative.  Results are appended as JSON lines; an interrupted run resumes where it stopped.
+relative; and for the ``lam2`` LP and the LP deciding ``lam1`` the certified brackets of the
+dense answer, HiGHS's reported point and HiGHS's final basis solved exactly, from exact residuals
+(:func:`certified_bracket`: on ill-conditioned FE strips HiGHS's reported point violates rows by
+2e-8 and its value is 1e-5 off, so raw values cannot decide).  Results are appended as JSON
+lines; an interrupted run resumes where it stopped.
 """
 
 from __future__ import annotations
