@@ -234,7 +234,8 @@ def complete_basis(A, z, s, e, n, max_missing=None):
             # one incremental Gram-Schmidt pass (formerly a matrix_rank SVD per candidate:
             # 849 SVDs, 60 s, on the Chebyshev LP of a 500-node FE strip, issue 26)
             # (projections of unit rows: independence measured against 1, not against the
-            # projection's own length, else near-null projections make the basis singular)
+            # projection's own length: a projection shorter than 1e-9 leaves the completed
+            # basis numerically singular whatever its direction)
             picked = _independent_rows(P, np.r_[nz, others[piv]], k, floor=1.0)
             if picked is None:
                 return None
