@@ -28,7 +28,11 @@ thread the CPU time is the time on one unshared core), peak RSS, ``lam1``,
 HiGHS of :func:`check_with_highs` (the ``lam2`` LP, the LP deciding ``lam1`` and three random
 rows' ``lam_high`` and ``lam_low``, each handed to HiGHS with the dense optimal basis as start
 and HiGHS's tolerances at 1e-9), each compared to 1e-9
-relative.  Results are appended as JSON lines; an interrupted run resumes where it stopped.
+relative; and for the ``lam2`` LP and the LP deciding ``lam1`` the certified brackets of the
+dense answer, HiGHS's reported point and HiGHS's final basis solved exactly, from exact residuals
+(:func:`certified_bracket`: on ill-conditioned FE strips HiGHS's reported point violates rows by
+2e-8 and its value is 1e-5 off, so raw values cannot decide).  Results are appended as JSON
+lines; an interrupted run resumes where it stopped.
 """
 
 from __future__ import annotations
@@ -129,15 +133,100 @@ def _highs(ch):
     return model
 
 
+_SPLIT = 134217729.0  # 2^27 + 1 (Dekker's split of a double into two 26-bit halves)
+
+
+def _split(a):
+    c = _SPLIT * a
+    hi = c - (c - a)
+    return hi, a - hi
+
+
+def exact_residual(A, x, b):
+    """``A x - b`` correctly rounded: each product ``A_ij x_j`` as the exact sum of two doubles
+    (Dekker's two-product), each row summed exactly by ``math.fsum`` (0.7 s at 1001 x 500).
+    So a residual of 2.7e-15 is 2.7e-15, not rounding noise of the matrix product."""
+    import math
+
+    p = A * x[None, :]
+    ah, al = _split(A)
+    xh, xl = _split(x)
+    err = ((ah * xh[None, :] - p) + ah * xl[None, :] + al * xh[None, :]) + al * xl[None, :]
+    T = np.hstack([p, err, -np.asarray(b, float)[:, None]])
+    return np.array([math.fsum(row) for row in T])
+
+
+#: A bracket end counts when its certificate holds to this (relative, exact residuals; the
+#: dense certificates hold to 5e-12 on the FE strips: multipliers of -5e-12 of the largest).
+BRACKET_TOL = 1e-10
+
+
+def certified_bracket(A, b, e, x, y, eq=()):
+    """What the point ``x`` and multipliers ``y`` of ``max e.x, A x <= b`` (rows ``eq`` with
+    equality) prove, from exact residuals: ``lo = e.x`` when ``x`` violates no row by more than
+    :data:`BRACKET_TOL` of its scale ``||A_i|| |x|_inf + |b_i|`` (as the engine's
+    :func:`~shakedown.bounds.certificates.kkt_residuals`; else ``-inf``), ``hi = b.y`` when
+    ``y`` has the right signs (to :data:`BRACKET_TOL` of ``|y|_inf``) and ``A^T y = e`` to
+    :data:`BRACKET_TOL` of ``max(max_j |A_:j|.|y|, |e|_inf)`` (weak duality; else ``inf``).
+    The multiplier of the last row (``-lam <= 0``, ``b = 0``) is the dual's free choice
+    ``max(0, -(m.y) - 1)``: it closes the ``lam`` column."""
+    x, y = np.asarray(x, float), np.asarray(y, float).copy()
+    eqm = np.zeros(len(b), bool)
+    eqm[list(eq)] = True
+    y[-1] = max(0.0, float(-(A[:-1, -1] @ y[:-1])) - 1.0)  # (A[:-1, -1] = -m)
+    r = exact_residual(A, x, b)
+    xs = max(float(np.abs(x).max()), 1.0)
+    viol = np.where(eqm, np.abs(r), np.maximum(r, 0.0)) / (np.linalg.norm(A, axis=1) * xs
+                                                          + np.abs(b))
+    sign = float(np.max(np.where(eqm, 0.0, np.maximum(-y, 0.0)))) / max(np.abs(y).max(), 1e-300)
+    st = exact_residual(A.T, y, e)
+    stat = np.abs(st) / max(float((np.abs(A).T @ np.abs(y)).max()), float(np.abs(e).max()))
+    primal, dual = float(viol.max()), max(sign, float(stat.max()))
+    value, bound = float(e @ x), float(b @ y)
+    return dict(value=value, bound=bound, primal=primal, dual=dual,
+                lo=value if primal <= BRACKET_TOL else -np.inf,
+                hi=bound if dual <= BRACKET_TOL else np.inf)
+
+
+def compare_brackets(dense, highs, scale):
+    """``conflict``: how far the two certified brackets are apart (0: they overlap, so the
+    certificates do not contradict each other); ``width``: the dense bracket's width (0 to
+    rounding: the dense answer is certified optimal); ``highs_off``: how far HiGHS's value
+    lies outside the dense bracket (its claim that no certificate backs)."""
+    conflict = max(0.0, highs["lo"] - dense["hi"], dense["lo"] - highs["hi"]) / scale
+    width = (dense["hi"] - dense["lo"]) / scale
+    off = max(0.0, highs["value"] - dense["hi"], dense["lo"] - highs["value"]) / scale
+    return dict(conflict=conflict, width=width, highs_off=off)
+
+
+def _basis_bracket(model, A, b, e, eq=()):
+    """HiGHS's final basis solved here (LU of its rows, :class:`~shakedown.dense_lp.Tableau`):
+    its exact basic solution and multipliers, bracketed like the others.  On the FE strips
+    (seed 5003) HiGHS's reported ``x`` differs from its own basis's basic solution by 0.07,
+    and that basis is feasible but 5e-7 short of the optimum (a multiplier of -1.3e-6)."""
+    from shakedown import dense_lp
+
+    T = model.tight_basis()
+    if T is None:
+        return None
+    tab = dense_lp.Tableau(A, b, e, T)
+    if tab.singular:
+        return None
+    y = np.zeros(len(b))
+    y[tab.T0] = tab.y0 / tab.rownorm[tab.T0]
+    return certified_bracket(A, b, e, tab.x0, y, eq=eq)
+
+
 def _verify(model, T, sense, tight=()):
-    """HiGHS started from the basis ``T`` (dense rows): its value, iterations and seconds."""
+    """HiGHS started from the basis ``T`` (dense rows): its value, iterations, seconds, and
+    its answer (``None`` if not checked)."""
     if T is None:  # no dense optimal basis to hand over: not checked (HiGHS cold is too slow)
-        return np.nan, -1, 0.0, False, "no dense basis"
+        return np.nan, -1, 0.0, False, "no dense basis", None
     accepted = model.start_from(np.sort(T))
     t = time.perf_counter()
     ans = model.run(sense, tight=tight)
     v = float(ans.x[-1]) if ans.status == "optimal" else np.nan
-    return v, int(ans.iterations), time.perf_counter() - t, bool(accepted), ans.status
+    return v, int(ans.iterations), time.perf_counter() - t, bool(accepted), ans.status, ans
 
 
 def check_with_highs(b, rng, on_partial=None):
@@ -171,9 +260,18 @@ def check_with_highs(b, rng, on_partial=None):
     slack[: 2 * n][y > 1e-12 * max(np.abs(y).max(initial=0.0), 1e-300)] = -1.0
     T = np.sort(np.argsort(slack, kind="stable")[: n + 1])
     model = _highs(ch)
-    v, it, s, ok, st = _verify(model, T, "max")
+    v, it, s, ok, st, hans = _verify(model, T, "max")
     out = {"highs_lam2_s": s, "highs_lam2_iters": it, "highs_lam2_basis_accepted": ok,
            "highs_lam2_status": st, "dlam2": abs(v - lam2) / scale if st == "optimal" else np.nan}
+    # certified brackets (exact residuals): the result's point and certificate, HiGHS's
+    # point and row duals
+    dense = certified_bracket(A, bb, e, x, np.r_[y * sc.force / lf, 0.0])
+    out["lam2_dense"] = dense
+    if st == "optimal":
+        highs = certified_bracket(A, bb, e, hans.x, np.r_[hans.row_dual[: 2 * n], 0.0])
+        out["lam2_highs"] = highs
+        out.update({f"lam2_{k}": v for k, v in compare_brackets(dense, highs, scale).items()})
+        out["lam2_highs_basis"] = _basis_bracket(model, A, bb, e)
     tab = dense_lp.Tableau(A, bb, e, T)
     starts = {"max": tab}
 
@@ -185,11 +283,20 @@ def check_with_highs(b, rng, on_partial=None):
         if t is None or t.singular:
             return None
         ans = dense_lp.batch_dual_simplex(t, [(k,)])[0]
-        return ans.basis if ans.status == "optimal" else None
+        return ans if ans.status == "optimal" else None
 
-    def one_row(sense, k):
+    def one_row(sense, k, bracket=False):
         t = time.perf_counter()
-        v, it, s, ok, st = _verify(model, dense_basis(sense, k), sense, tight=(k,))
+        d = dense_basis(sense, k)
+        v, it, s, ok, st, hans = _verify(model, None if d is None else d.basis, sense,
+                                         tight=(k,))
+        if bracket and sense == "max" and st == "optimal" and d is not None:
+            dense = certified_bracket(A, bb, e, d.x, d.y, eq=(k,))
+            highs = certified_bracket(A, bb, e, hans.x, np.r_[hans.row_dual[: 2 * n], 0.0],
+                                      eq=(k,))
+            out.update(lam1_dense=dense, lam1_highs=highs,
+                       lam1_highs_basis=_basis_bracket(model, A, bb, e, eq=(k,)), **{
+                f"lam1_{key}": val for key, val in compare_brackets(dense, highs, scale).items()})
         return v, it, time.perf_counter() - t, ok, st
 
     def diff(v, st, ref):
@@ -203,7 +310,7 @@ def check_with_highs(b, rng, on_partial=None):
     k = b.limiting_constraint
     if k >= 0 and np.isfinite(b.lam1):
         sense, ref = ("max", b.lam1 / lf) if b.lam1 > 0 else ("min", b.lam_low[k] / lf)
-        v, it, s, ok, st = one_row(sense, k)
+        v, it, s, ok, st = one_row(sense, k, bracket=True)
         out.update(highs_lam1_s=s, highs_lam1_iters=it, highs_lam1_basis_accepted=ok,
                    highs_lam1_status=st, dlam1=diff(max(v, 0.0) if sense == "min" else v, st,
                                                     ref))
@@ -332,6 +439,22 @@ def scaled(rs, cmin):
     return f"{max(v):.3g} ({len(v)})" if v else "-"
 
 
+def _cert_summary(rs):
+    """Certified brackets (the records with them): ``dense certified / checked; HiGHS's point
+    certified; worst conflict; worst HiGHS value outside the dense bracket`` over the lam2 and
+    lam1 LPs."""
+    pairs = [(r[f"{q}_dense"], r.get(f"{q}_highs"), r.get(f"{q}_conflict"),
+              r.get(f"{q}_highs_off")) for r in rs for q in ("lam2", "lam1")
+             if f"{q}_dense" in r]
+    if not pairs:
+        return "-"
+    tight = sum(1 for d, *_ in pairs if np.isfinite(d["lo"]) and np.isfinite(d["hi"]))
+    hc = sum(1 for _, h, *_ in pairs if h and np.isfinite(h["lo"]) and np.isfinite(h["hi"]))
+    conflict = max((c for *_, c, _ in pairs if c is not None), default=np.nan)
+    off = max((o for *_, o in pairs if o is not None), default=np.nan)
+    return f"{tight}/{len(pairs)}; {hc}/{len(pairs)}; {conflict:.1e}; {off:.1e}"
+
+
 def report(paths):
     rows = [json.loads(ln) for p in paths for ln in Path(p).read_text().splitlines()]
     keys = sorted({(r["kind"], r["n"]) for r in rows})
@@ -339,8 +462,9 @@ def report(paths):
           "worst CPU s scaled by the calibration | worst peak RSS GB | "
           "fallbacks: LPs (realizations; stages) | worst diff to HiGHS: "
           "lam2 / lam1 LP / spot rows | HiGHS pivots from the dense bases (max) | load | "
-          "errors |")
-    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+          "errors | certified brackets (lam2, lam1 LPs): dense / HiGHS's point / worst "
+          "conflict / worst HiGHS value outside the dense bracket |")
+    print("| --- " * 15 + "|")
     cal = [r["calib_cpu"] for r in rows if "calib_cpu" in r]
     cmin = min(cal, default=np.nan)
     for kind, n in keys:
@@ -370,7 +494,7 @@ def report(paths):
               f"{sum(fb)} ({sum(1 for f in fb if f)}; {_fallback_stages(rs)}) | "
               f"{worst('dlam2')} / {worst('dlam1')} / {worst('dspot')}"
               f"{f' ({unchecked} not checked)' if unchecked else ''} | {piv} | "
-              f"{min(loads):.1f}-{max(loads):.1f} | {err} |")
+              f"{min(loads):.1f}-{max(loads):.1f} | {err} | {_cert_summary(ck)} |")
 
 
 if __name__ == "__main__":

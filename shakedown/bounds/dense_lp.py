@@ -97,7 +97,7 @@ def _crossover(A, b, e, As, s, z, it):
     n = A.shape[1]
     T = identify_basis(As, z, s, n)
     tab = Tableau(A, b, e, T) if T is not None else None
-    first = tab
+    first = completed = tab
     if tab is not None and not tab.singular and not tab.dual_feasible:
         tab = _primal_finish(A, b, e, tab) or tab  # a few primal pivots from a feasible basis
     if tab is None or tab.singular or not tab.dual_feasible:
@@ -106,7 +106,7 @@ def _crossover(A, b, e, As, s, z, it):
         T = complete_basis(As, z, s, e, n)
         if T is None:
             return finish_from(A, b, e, first, it)
-        tab = Tableau(A, b, e, T)
+        tab = completed = Tableau(A, b, e, T)
         ymax = max(float(np.abs(tab.y0).max()), np.finfo(float).tiny)
         if not tab.singular and tab.y0.min() >= -1e-6 * ymax:
             # multipliers that are zero up to the interior point's accuracy; the final
@@ -115,14 +115,35 @@ def _crossover(A, b, e, As, s, z, it):
     if tab is not None and not tab.singular and not tab.dual_feasible:
         tab = _primal_finish(A, b, e, tab)
     if tab is None or tab.singular or not tab.dual_feasible:
-        return finish_from(A, b, e, first, it)
+        return _finish_any(A, b, e, (completed, first), it)
     ans = batch_dual_simplex(tab, [()])[0]
     if ans.status != "optimal":
-        return finish_from(A, b, e, first, it)
+        return _finish_any(A, b, e, (completed, first), it)
     if ans.iterations:
         tab = Tableau(A, b, e, ans.basis)
     ans = DenseAnswer(ans.status, ans.x, ans.y, ans.basis, ans.iterations + it, ans.residuals)
     return ans, tab
+
+
+def _finish_any(A, b, e, starts, it):
+    """:func:`finish_from` from each distinct start in turn (the completed basis of
+    :func:`~.ipm.complete_basis` first, then the identified one); the first certified answer.
+
+    Issue 26 (FE strip, 500 contact nodes, seed 5017): only 37 of 500 rows are strongly
+    active at the ``lam2`` optimum (a large optimal face), :func:`~.ipm.identify_basis` finds
+    no non-singular basis among the rest (their ``z / s`` all ``~2.7e-7``), the completed
+    basis reaches a primal feasible vertex in 2 dual pivots but keeps a multiplier of
+    ``-6.4e-7`` (of ``0.69``); formerly only the identified basis (here none) was finished, so
+    the LP went to HiGHS.  From the completed basis the primal finish ends certified."""
+    seen = set()
+    for t in starts:
+        if t is None or t.singular or tuple(t.T0) in seen:
+            continue
+        seen.add(tuple(t.T0))
+        ans, tab = finish_from(A, b, e, Tableau(A, b, e, t.T0), it)  # (a fresh y0: clamped)
+        if ans is not None:
+            return ans, tab
+    return None, None
 
 
 def finish_from(A, b, e, tab, it=0):
@@ -155,7 +176,9 @@ def finish_from(A, b, e, tab, it=0):
     tab = Tableau(A, b, e, np.sort(ans.basis))
     if tab.singular:
         return None, None
-    if ans.status != "optimal" and not tab.dual_feasible:
+    if not tab.dual_feasible:  # (also when the dual simplex certified its final basis to
+        # CERT_TOL with a multiplier below -1e-9: HiGHS's basis of issue 26, -1.2e-8 of the
+        # largest, was refused here without a primal pivot)
         tab = _primal_finish(A, b, e, tab)  # None unless a feasible vertex (FacetWalk checks)
         if tab is None:
             return None, None

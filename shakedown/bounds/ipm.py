@@ -165,9 +165,10 @@ def _nonsingular(M) -> bool:
     return bool(d.min() > 1e-12 * d.max())
 
 
-def _independent_rows(A, order, n, rtol=1e-9):
+def _independent_rows(A, order, n, rtol=1e-9, floor=0.0):
     """The first ``n`` rows of ``A`` in ``order`` each independent of those before it
-    (Gram-Schmidt, orthogonalised twice), sorted; ``None`` if fewer than ``n`` exist."""
+    (Gram-Schmidt, orthogonalised twice: the remainder longer than ``rtol`` times the row's
+    length or ``floor``, whichever is larger), sorted; ``None`` if fewer than ``n`` exist."""
     Q = np.empty((n, A.shape[1]))
     picked = []
     for i in order:
@@ -178,7 +179,7 @@ def _independent_rows(A, order, n, rtol=1e-9):
         r = a - (a @ Q[: len(picked)].T) @ Q[: len(picked)]
         r -= (r @ Q[: len(picked)].T) @ Q[: len(picked)]
         nr = np.linalg.norm(r)
-        if nr > rtol * na:
+        if nr > rtol * max(na, floor):
             Q[len(picked)] = r / nr
             picked.append(int(i))
             if len(picked) == n:
@@ -232,13 +233,15 @@ def complete_basis(A, z, s, e, n, max_missing=None):
         if len(chosen) < k:  # pad with the best-conditioned remaining projections
             others = np.setdiff1d(np.arange(len(rest)), nz)
             _, _, piv = sla.qr(P[others].T, mode="economic", pivoting=True)
-            picked = list(nz)
-            for j in others[piv]:
-                if len(picked) == k:
-                    break
-                if np.linalg.matrix_rank(P[picked + [j]]) == len(picked) + 1:
-                    picked.append(int(j))
-            chosen = rest[np.asarray(picked, dtype=int)]
+            # one incremental Gram-Schmidt pass (formerly a matrix_rank SVD per candidate:
+            # 849 SVDs, 60 s, on the Chebyshev LP of a 500-node FE strip, issue 26)
+            # (projections of unit rows: independence measured against 1, not against the
+            # projection's own length: a projection shorter than 1e-9 leaves the completed
+            # basis numerically singular whatever its direction)
+            picked = _independent_rows(P, np.r_[nz, others[piv]], k, floor=1.0)
+            if picked is None:
+                return None
+            chosen = rest[picked]
     T = np.r_[C, chosen].astype(int)
     if len(np.unique(T)) != n:
         return None

@@ -8,7 +8,10 @@ progress display (one step per stage).  The result carries it as
 :attr:`~.result.ShakedownBounds.stages`, a tuple of :class:`StageRecord`.
 
 Stages: ``"lam2"`` (the ``lam2`` LP), ``"lam_low"``, ``"lam_high"`` (activity intervals),
-``"adjacency"``, ``"separation"``.  Paths: ``"dense"`` (interior point / dual simplex, certified),
+``"adjacency"``, ``"separation"``, ``"safe_state"`` (the Chebyshev centre of ``H(safe_lam)``: one
+LP, dense when the interior point's centre is certified or its crossover ends certified, else
+HiGHS; issue 26: on FE strips it took 30 s of a 32 s computation outside every record).
+Paths: ``"dense"`` (interior point / dual simplex, certified),
 ``"walk"`` (rows decided by a certified vertex walk, no LP), ``"highs"`` (HiGHS re-solve of an
 LP the dense path could not certify, or the HiGHS path itself).
 """
@@ -20,7 +23,7 @@ from collections import Counter
 from dataclasses import dataclass
 
 #: The stages in the order they run.
-STAGES = ("lam2", "lam_low", "lam_high", "adjacency", "separation")
+STAGES = ("lam2", "lam_low", "lam_high", "adjacency", "separation", "safe_state")
 
 
 @dataclass(frozen=True)
@@ -78,6 +81,7 @@ class StageLog:
         self._t = None
         self._ticks = iter(progress(iter(stages), total=len(stages), desc=desc)) \
             if progress is not None else None
+        self._left = list(stages)  # not yet shown: a stage's tick moves past those skipped
 
     def _row(self, stage):
         if stage not in self._rows:
@@ -91,7 +95,9 @@ class StageLog:
         self.stop()
         self._row(stage)
         self._current, self._t = stage, time.perf_counter()
-        if self._ticks is not None:
+        if self._ticks is not None and stage in self._left:  # (a stage run again: no tick)
+            while self._left and self._left.pop(0) != stage:
+                next(self._ticks, None)  # a stage not run (e.g. adjacency)
             next(self._ticks, None)
 
     def stop(self) -> None:

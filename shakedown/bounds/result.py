@@ -62,7 +62,8 @@ class ShakedownBounds:
         Chebyshev centre of ``H(safe_lam)`` (the safe slip state farthest from every extreme
         constraint) or empty if ``H`` is empty.
     safe_margin : float
-        Its distance to the nearest extreme constraint [slip units].
+        Its distance to the nearest extreme constraint [slip units], exact for ``safe_state``
+        and proven at most ``engine.CENTRE_RTOL`` (1e-4, relative) below the largest possible.
     state_at_lam2 : ndarray, shape (N,)
         The LP optimum ``v*`` at ``lam2`` (the last safe point).
     certificate : ndarray, shape (2N,)

@@ -20,7 +20,7 @@ from test_lp import highs_max, random_lp
 import shakedown as sd
 from shakedown import dense_lp
 from shakedown.bounds import dense_path, highs_path
-from shakedown.bounds.provenance import StageRecord, costly_fallback
+from shakedown.bounds.provenance import STAGES, StageRecord, costly_fallback
 
 
 def _problem():
@@ -172,9 +172,10 @@ def test_stages_drive_the_progress_display():
             yield item
 
     b = sd.shakedown_bounds(system, load, progress=progress)
-    assert seen[0] == (5, "shakedown bounds")
-    assert seen[1:] == ["lam2", "lam_low", "lam_high", "adjacency", "separation"]
+    assert seen[0] == (6, "shakedown bounds")
+    assert seen[1:] == ["lam2", "lam_low", "lam_high", "adjacency", "separation", "safe_state"]
     assert [s.stage for s in b.stages][:3] == ["lam2", "lam_low", "lam_high"]
+    assert b.stages[-1].stage == "safe_state" and b.stages[-1].dense_lps == 1
     assert b.to_dict()["stages"][0]["stage"] == "lam2"
 
 
@@ -197,3 +198,129 @@ def test_a_highs_lp_that_stops_without_an_answer_is_not_read_as_infeasible(monke
         sd.shakedown_bounds(system, load)
     with pytest.raises(SolverError):
         sd.shakedown_bounds(system, load, solver="highs")
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_finish_from_a_feasible_basis_with_a_slightly_negative_multiplier(seed):
+    """Issue 26 (FE strip, seed 5017): HiGHS's optimal ``lam2`` basis is primal feasible in the
+    dense coordinates, its smallest multiplier ``-1.2e-8`` of the largest: inside CERT_TOL, not
+    dual feasible to 1e-9, and it was refused without a primal pivot.  Here such a basis is
+    made by tilting the objective of an optimal one; the finish must end at HiGHS's optimum
+    of the tilted LP, certified."""
+    A, b, e = random_lp(8, 30, seed)
+    ans, tab = dense_lp.solve_max(A, b, e)
+    T = np.sort(ans.basis)
+    B = A[T] / np.linalg.norm(A[T], axis=1)[:, None]
+    y = np.linalg.solve(B.T, e)
+    j = int(np.argmax(y))
+    e2 = e - (y[j] + 3e-8 * np.abs(y).max()) * B[j]  # y_j -> -3e-8 |y|, the rest unchanged
+    tab2 = dense_lp.Tableau(A, b, e2, T)
+    assert not tab2.dual_feasible and tab2.y0.min() > -1e-7 * np.abs(tab2.y0).max()
+    assert np.all(tab2.act0 <= tab2.b + 1e-12)  # primal feasible
+    got, out = dense_lp.finish_from(A, b, e2, tab2)
+    assert got is not None and got.status == "optimal" and out.dual_feasible
+    # (HiGHS at its default dual tolerance 1e-7 stops at the tilted basis itself: tightened)
+    from shakedown.bounds.lp import ReusableLP
+
+    lp = ReusableLP(A, np.full(len(b), -np.inf), b, np.full(8, -np.inf), np.full(8, np.inf), e2)
+    for opt in ("primal_feasibility_tolerance", "dual_feasibility_tolerance"):
+        lp._h.setOptionValue(opt, 1e-10)
+    ref = lp.solve()
+    assert e2 @ got.x == pytest.approx(ref.objective, rel=1e-9)
+    assert e2 @ got.x > e2 @ tab2.x0 + 1e-10  # (the tilted basis itself is not the optimum)
+    assert max(dense_lp.kkt_residuals(A, b, e2, got.x, got.y)) <= dense_lp.CERT_TOL
+
+
+def test_a_safe_state_fallback_is_recorded_and_costly_ones_are_said(monkeypatch):
+    """Issue 26: the safe state (Chebyshev centre) took 30 s of a 32 s computation on FE
+    strips, outside every stage.  It is now the stage ``safe_state``: dense when certified;
+    forced to fail here, HiGHS with its reason, counted as a fallback, in the message, and in
+    the verdict when it cost more than the rest.  The centre is HiGHS's; the dense one is
+    certified within ``CENTRE_RTOL`` below it."""
+    from test_bounds import random_problem
+
+    from shakedown.bounds import engine
+
+    system, load = random_problem(40, 1)
+    ref = sd.shakedown_bounds(system, load)
+    st = ref.stages[-1]
+    assert st.stage == "safe_state" and st.path == "dense" and st.fallbacks == 0
+    assert ref.lam1 > 0 and ref.safe_margin > 0
+    real = dense_lp.solve_max
+
+    def no_centre(A, b, e, **kw):  # the centre LP's interior point and crossover fail
+        return (None, None) if kw.get("interior") else real(A, b, e, **kw)
+
+    monkeypatch.setattr(dense_lp, "solve_max", no_centre)
+    b = sd.shakedown_bounds(system, load)
+    st = b.stages[-1]
+    assert (st.stage, st.path, st.highs_lps, st.fallbacks) == ("safe_state", "highs", 1, 1)
+    assert "centre not certified" in st.reasons[0] and "safe_state: 1" in b.message
+    assert b.lam2 == ref.lam2 and b.safe_lam == ref.safe_lam
+    r_h, r_d = b.safe_margin, ref.safe_margin
+    assert r_h * (1 - engine.CENTRE_RTOL) <= r_d <= r_h * (1 + 1e-9)
+    costly = dataclasses.replace(b, solve_time=1.5 * st.fallback_seconds).verdict()
+    assert "1 LP(s) (1 safe_state) could not be certified by the dense path" in costly
+    assert "HiGHS" not in dataclasses.replace(b, solve_time=10 * st.fallback_seconds).verdict()
+
+
+def _fe_strip_5017():
+    """The FE strip of ``benchmarks/bench_bounds_realizations.py`` (``--kind fe``, N = 500,
+    realization 17, seed 5017), where issue 26's cliff was found on FE strips."""
+    from shakedown import fe
+
+    rng = np.random.default_rng(5017)
+    friction = float(rng.uniform(0.3, 0.9))
+    shear, press, rot = rng.uniform(0.2, 0.6), rng.uniform(-0.3, 0.3), rng.uniform(0.0, 0.3)
+    loads = {"dead": fe.Traction("top", (0.0, -1.0)), "shear": fe.Traction("top", (1.0, 0)),
+             "press": fe.Traction("top", (0.0, 1.0))}
+    model = fe.FEModel(fe.rectangle(4.99, 0.1, 499, 8), fe.isotropic(1.0, 0.3),
+                       dirichlet={"left": "xy"}, contact=["bottom"], loads=loads,
+                       friction=friction)
+    cm = model.condense()
+    return cm.system, cm.load_cycle(static="dead", cyclic={"shear": shear, "press": press},
+                                    cyclic_sin={"shear": rot})
+
+
+def _farkas(b, rtol=1e-9):
+    cs, y = b.constraints, b.certificate
+    ys = np.abs(y).max()
+    assert y.min() >= -rtol * ys
+    assert np.abs(cs.G.T @ y).max() <= rtol * np.abs(cs.G).max() * ys
+    assert cs.c @ y / (-(cs.m @ y)) == pytest.approx(b.lam2, rel=rtol)
+    off = cs.offsets(b.lam2)
+    assert (cs.G @ b.state_at_lam2 - off).max() <= 1e-10 * np.abs(off).max()
+
+
+@pytest.mark.slow
+def test_fe_strip_5017_stays_dense_and_a_forced_lam2_failure_comes_back(monkeypatch):
+    """Issue 26, FE strip seed 5017 (500 contact nodes): the dense ``lam2`` LP was not
+    certified (37 strongly active rows, no non-singular basis among the rest; the completed
+    basis was never finished), HiGHS's optimal basis was refused in the dense coordinates (a
+    multiplier of -1.2e-8 of the largest: no primal pivot was tried), so all 1999 LPs went to
+    HiGHS: 79 s against 1.9 s.  Now every stage is dense; and with the dense ``lam2`` LP forced
+    to fail, HiGHS's basis comes back certified and only that LP falls back, same answer."""
+    system, load = _fe_strip_5017()
+    ref = sd.shakedown_bounds(system, load)
+    assert all(s.fallbacks == 0 and "highs" not in s.path for s in ref.stages)
+    assert ref.stages[0].path == "dense" and ref.stages[-1].stage == "safe_state"
+    _farkas(ref)
+    calls = _force_lam2_failure(monkeypatch)
+    b = sd.shakedown_bounds(system, load)
+    assert calls["lam2"] == 1 and len(calls["highs"]) == 1
+    assert [s.fallbacks for s in b.stages] == [1] + [0] * (len(b.stages) - 1)
+    assert b.lam2 == pytest.approx(ref.lam2, rel=1e-9) and b.lam1 == pytest.approx(ref.lam1,
+                                                                                  rel=1e-9)
+    _farkas(b)
+
+
+@pytest.mark.parametrize("stage", STAGES)
+def test_the_verdict_names_a_costly_fallback_in_any_stage(stage):
+    system, load = _problem()
+    b = sd.shakedown_bounds(system, load)
+    others = tuple(_record(s, 0, 1.0, 0.0) for s in STAGES if s != stage)
+    costly = others + (_record(stage, 1, 7.0, 6.0),)
+    text = dataclasses.replace(b, stages=costly, solve_time=11.0).verdict()
+    assert f"1 LP(s) (1 {stage}) could not be certified" in text and "6 s of the 11 s" in text
+    cheap = others + (_record(stage, 1, 7.0, 5.0),)  # 5 s against 6 s for the rest
+    assert "HiGHS" not in dataclasses.replace(b, stages=cheap, solve_time=11.0).verdict()
