@@ -121,8 +121,36 @@ def _crossover(A, b, e, As, s, z, it):
         return _finish_any(A, b, e, (completed, first), it)
     if ans.iterations:
         tab = Tableau(A, b, e, ans.basis)
-    ans = DenseAnswer(ans.status, ans.x, ans.y, ans.basis, ans.iterations + it, ans.residuals)
-    return ans, tab
+    out = _optimal_basis(A, b, e, ans, tab, ans.iterations + it)
+    if out[0] is not None:
+        return out
+    # (no primal finish: the dual simplex's answer, certified to CERT_TOL, as before)
+    return DenseAnswer(ans.status, ans.x, ans.y, ans.basis, ans.iterations + it, ans.residuals), tab
+
+
+def _optimal_basis(A, b, e, ans, tab, pivots):
+    """The dual simplex's answer ``ans`` (any status) on its final basis ``tab`` as a certified
+    :class:`DenseAnswer` whose multipliers are non-negative to 1e-9 (``tab.dual_feasible``),
+    else ``(None, None)``.
+
+    The dual simplex certifies its final basis to ``CERT_TOL``; a multiplier between
+    ``-CERT_TOL`` and ``-1e-9`` of the largest means a vertex that need not be optimal (issue
+    26: HiGHS's ``lam2`` basis on an FE strip, ``-1.2e-8``; a random dense system ``N = 1000``,
+    seed 5006, whose crossover ended at ``-8.2e-8`` with ``lam2`` ``2.6e-8`` below the optimum).
+    Such a basis is finished by primal pivots (:func:`_primal_finish`) and certified again."""
+    if tab.singular:
+        return None, None
+    if not tab.dual_feasible:
+        tab = _primal_finish(A, b, e, tab)  # None unless a feasible vertex (FacetWalk checks)
+        if tab is None:
+            return None, None
+        ans = batch_dual_simplex(tab, [()])[0]  # certify (0 pivots at an optimum)
+        pivots += ans.iterations
+        if ans.iterations:
+            tab = Tableau(A, b, e, ans.basis)
+    if ans.status != "optimal" or tab.singular or not tab.dual_feasible:
+        return None, None
+    return DenseAnswer(ans.status, ans.x, ans.y, ans.basis, pivots, ans.residuals), tab
 
 
 def _finish_any(A, b, e, starts, it):
@@ -176,17 +204,7 @@ def finish_from(A, b, e, tab, it=0):
     tab = Tableau(A, b, e, np.sort(ans.basis))
     if tab.singular:
         return None, None
-    if not tab.dual_feasible:  # (also when the dual simplex certified its final basis to
-        # CERT_TOL with a multiplier below -1e-9: HiGHS's basis of issue 26, -1.2e-8 of the
-        # largest, was refused here without a primal pivot)
-        tab = _primal_finish(A, b, e, tab)  # None unless a feasible vertex (FacetWalk checks)
-        if tab is None:
-            return None, None
-        ans = batch_dual_simplex(tab, [()])[0]  # certify (0 pivots at an optimum)
-        pivots += ans.iterations
-        if ans.iterations:
-            tab = Tableau(A, b, e, ans.basis)
-    if ans.status != "optimal" or tab.singular or not tab.dual_feasible:
-        return None, None
-    ans = DenseAnswer(ans.status, ans.x, ans.y, ans.basis, pivots + it, ans.residuals)
-    return ans, tab
+    # (also when the dual simplex certified its final basis to CERT_TOL with a multiplier
+    # below -1e-9: HiGHS's basis of issue 26, -1.2e-8 of the largest, was refused here without
+    # a primal pivot)
+    return _optimal_basis(A, b, e, ans, tab, pivots + it)
