@@ -61,6 +61,7 @@ def shakedown_bounds(
     only=None,
     solver: str = "auto",
     facets: int | None = None,
+    rtol: float | None = None,
     progress=None,
 ) -> ShakedownBounds:
     """Shakedown load factors ``lam1 <= lam2`` with certificates (MODEL.md s.3).
@@ -96,6 +97,12 @@ def shakedown_bounds(
     facets : int, optional
         3-D only (``system.dim == 3``): facets ``k`` per node of the inscribed polygons of the
         polyhedral lower-bound candidates (default 8).
+    rtol : float, optional
+        3-D only: relative width of the certified bracket ``[lam2_lower, lam2_upper]`` at which
+        the cutting planes stop (dimensionless, ``1e-12 <= rtol < 1``; default ``1e-6``).
+        Below ``1e-7`` the dense interior point solves its late Newton systems in a split
+        augmented form (slower, ``docs/guide/bounds_3d.md``).  2-D bounds are vertices of LPs,
+        exact to round-off: no ``rtol``.
     solver : {"auto", "highs", "dense", "clarabel"}
         3-D (``system.dim == 3``): ``"dense"`` solves the SOCPs of ``lam2`` by the dense interior
         point (every answer checked, Clarabel where a check fails; recorded in
@@ -145,9 +152,14 @@ def shakedown_bounds(
 
         check_same_dimension(system, load)  # a 2-D system with a 3-D load: named by the check
 
+        extra = {} if rtol is None else {"rtol": _bracket_rtol(rtol)}
         return cone_bounds(system, load, lam=lam, only=only, facets=facets, intervals=intervals,
                            adjacency=adjacency,
-                           solver="clarabel" if solver == "highs" else solver)
+                           solver="clarabel" if solver == "highs" else solver, **extra)
+    if rtol is not None:
+        raise InputError(f"rtol applies to three-dimensional systems only (system.dim = 3: "
+                         f"the width of the lam2 bracket); got rtol={rtol!r} for a 2-D system, "
+                         "whose bounds are exact LP vertices: leave it out")
     if facets is not None:
         raise InputError(f"facets applies to three-dimensional systems only (system.dim = 3); "
                          f"got facets={facets!r} for a 2-D system: leave it out")
@@ -334,3 +346,15 @@ __all__ = [
     "LAM_RTOL",
     "_polygon_2d",
 ]
+
+
+def _bracket_rtol(rtol) -> float:
+    """``rtol`` of :func:`shakedown_bounds` checked: a real number in ``[1e-12, 1)``."""
+    try:
+        r = float(rtol)
+    except (TypeError, ValueError):
+        r = float("nan")
+    if isinstance(rtol, bool) or not 1e-12 <= r < 1.0:
+        raise InputError(f"rtol must be a number in [1e-12, 1) (the relative width of the lam2 "
+                         f"bracket); got rtol={rtol!r}: use e.g. rtol=1e-8")
+    return r

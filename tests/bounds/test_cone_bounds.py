@@ -333,3 +333,23 @@ def test_verdict_table_and_json_of_a_3d_result():
     assert list(t["node"]) == [1, 2, 3] and t["cuts"].sum() == b.n_cuts
     assert np.all((t["t_worst"] >= 0) & (t["t_worst"] < 1))
     assert b.lam_adj_cone <= b.lam2_polygon * (1 + 1e-7) <= b.lam2 * (1 + 1e-7)
+
+
+def test_rtol_of_shakedown_bounds_reaches_the_cone_engine_and_is_checked():
+    """``sd.shakedown_bounds(..., rtol=)`` sets the width of the 3-D ``lam2`` bracket (it was
+    fixed at 1e-6 from the public function); it is refused, naming the field, for a 2-D
+    system (exact LP vertices) and outside [1e-12, 1)."""
+    s, load = random_3d(6, 21), random_load(6, 22)
+    loose = sd.shakedown_bounds(s, load, only=("lam2",), rtol=1e-2, solver="dense")
+    tight = sd.shakedown_bounds(s, load, only=("lam2",), rtol=1e-8, solver="dense")
+    assert tight.status == "bounded"
+    assert tight.lam2_upper - tight.lam2_lower <= 1e-8 * tight.lam2_upper
+    assert loose.lam2_upper - loose.lam2_lower > tight.lam2_upper - tight.lam2_lower
+    assert loose.lam2_lower <= tight.lam2_upper and tight.lam2_lower <= loose.lam2_upper
+    for bad in (0.0, 1.0, -1e-6, float("nan"), "tight", True):
+        with pytest.raises(InputError, match="rtol"):
+            sd.shakedown_bounds(s, load, only=("lam2",), rtol=bad)
+    s2 = sd.DiscreteSystem(np.array([[2.0]]), np.array([[0.0]]), np.array([[1.0]]), friction=0.5)
+    load2 = sd.LoadCycle.from_harmonics(q0=[0.0], p0=[-1.0], q_cos=[0.3])
+    with pytest.raises(InputError, match="rtol applies to three-dimensional"):
+        sd.shakedown_bounds(s2, load2, rtol=1e-8)
