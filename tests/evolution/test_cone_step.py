@@ -301,3 +301,22 @@ def test_rows_of_k_reused_across_steps_only_for_the_same_slip_and_separated_node
         np.testing.assert_allclose(a.gap, b.gap, rtol=0, atol=1e-12 * b.force_scale)
         pieces.append(tuple(a.states))
     assert len(set(pieces)) >= 3  # the pieces changed between steps (and repeated)
+
+
+def test_a_step_assembled_directly_keeps_the_cached_rows_of_k_valid():
+    """A step started near its answer (one Newton iteration expected: the matrix is assembled
+    from ``K`` directly, the cached gather of another piece is kept) between two cold solves of
+    the same step (the second reuses that gather): every answer, method and iteration count as
+    with a fresh solver."""
+    s, v, q_w, p_w = random_3d(12, 4, separation=True)
+    load_b = (3.0 * q_w, np.abs(p_w) + 0.5)
+    ref_b = ConeStepSolver(s, dense_max=4).solve(v, *load_b)
+    guess = np.column_stack([ref_b.slip_increment, ref_b.gap]) * (1.0 + 1e-9)
+    shared = ConeStepSolver(s, dense_max=4)
+    for load, g in (((q_w, p_w), None), (load_b, guess), ((q_w, p_w), None)):
+        a = shared.solve(v, *load, guess=g)
+        b = ConeStepSolver(s, dense_max=4).solve(v, *load, guess=g)
+        assert a.success and (a.method, a.iterations) == (b.method, b.iterations)
+        assert a.method == ("newton" if g is not None else "newton_cold")
+        np.testing.assert_allclose(a.q, b.q, rtol=0, atol=1e-12 * b.force_scale)
+    assert not np.array_equal(ref_b.states, a.states)  # the middle step's piece differs
