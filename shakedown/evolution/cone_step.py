@@ -195,6 +195,10 @@ class ConeStepSolver:
             self.well_posed = bool(crit.well_posed)
         except NotImplementedError:  # before the 3-D bound is wired into the system
             self.well_posed = not self.data.coupled
+        # rows of K for the last piece's unknowns, reused by the next iteration or step with
+        # the same slip and separated nodes (cone_kernel.newton_cached)
+        self._cache = ck.new_cache(self.n)
+        self._gathered = np.full(self.n, -1, np.int8)
         self.totals = dict(steps=0, iterations=0, cold_restarts=0, gauss_seidel=0, failed=0)
 
     # ------------------------------------------------------------------ base reactions
@@ -232,8 +236,9 @@ class ConeStepSolver:
             given = guess is not None and ku0 is not None
             if given:
                 r[:] = rbf + np.asarray(ku0, float).ravel()
-            code, it, _ = ck.newton(d.Kn, rbf, d.sx, d.sy, d.g, self.rhoT, self.rhoN, u, r, st,
-                                    tol, self.max_iter, self.dense_max, slack, F, given)
+            code, it, _ = ck.newton_cached(d.Kn, rbf, d.sx, d.sy, d.g, self.rhoT, self.rhoN, u,
+                                           r, st, tol, self.max_iter, self.dense_max, slack, F,
+                                           given, self._cache, self._gathered)
             iters += it
             res = self._verify(rbf, u, r, F, equilibrium)
             if best is None or res.worst < best[3].worst:

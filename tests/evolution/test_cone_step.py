@@ -280,3 +280,43 @@ def test_warm_start_with_its_reactions_given_and_a_wrong_product_caught_by_the_v
     wrong = sol.solve_raw(rb, u0, ku0=ku0 + 1e-6 * F)
     assert wrong[3] == "newton_cold" and wrong[5].worst <= sol.feas_tol
     np.testing.assert_allclose(wrong[1][:, :2], ref.q, rtol=0, atol=1e-10 * F)
+
+
+def test_rows_of_k_reused_across_steps_only_for_the_same_slip_and_separated_nodes():
+    """One solver (its rows of ``K`` gathered for the last piece are reused by the next step when
+    the slip and separated nodes are the same, ``cone_kernel.newton_cached``) through steps whose
+    pieces differ and repeat gives, step by step, the answers, methods and iteration counts of a
+    fresh solver per step: a stale gather is never used."""
+    s, v, q_w, p_w = random_3d(12, 3, separation=True)
+    shared = ConeStepSolver(s, dense_max=4)
+    loads = [(q_w, p_w), (0.2 * q_w, np.abs(p_w) + 0.5), (3.0 * q_w, np.abs(p_w) + 0.5),
+             (q_w, p_w), (q_w, p_w)]
+    pieces = []
+    for qk, pk in loads:
+        a = shared.solve(v, qk, pk)
+        b = ConeStepSolver(s, dense_max=4).solve(v, qk, pk)
+        assert a.success and b.success
+        assert (a.method, a.iterations) == (b.method, b.iterations) == ("newton_cold", b.iterations)
+        np.testing.assert_allclose(a.q, b.q, rtol=0, atol=1e-12 * b.force_scale)
+        np.testing.assert_allclose(a.gap, b.gap, rtol=0, atol=1e-12 * b.force_scale)
+        pieces.append(tuple(a.states))
+    assert len(set(pieces)) >= 3  # the pieces changed between steps (and repeated)
+
+
+def test_a_step_assembled_directly_keeps_the_cached_rows_of_k_valid():
+    """A step started near its answer (one Newton iteration expected: the matrix is assembled
+    from ``K`` directly, the cached gather of another piece is kept) between two cold solves of
+    the same step (the second reuses that gather): every answer, method and iteration count as
+    with a fresh solver."""
+    s, v, q_w, p_w = random_3d(12, 4, separation=True)
+    load_b = (3.0 * q_w, np.abs(p_w) + 0.5)
+    ref_b = ConeStepSolver(s, dense_max=4).solve(v, *load_b)
+    guess = np.column_stack([ref_b.slip_increment, ref_b.gap]) * (1.0 + 1e-9)
+    shared = ConeStepSolver(s, dense_max=4)
+    for load, g in (((q_w, p_w), None), (load_b, guess), ((q_w, p_w), None)):
+        a = shared.solve(v, *load, guess=g)
+        b = ConeStepSolver(s, dense_max=4).solve(v, *load, guess=g)
+        assert a.success and (a.method, a.iterations) == (b.method, b.iterations)
+        assert a.method == ("newton" if g is not None else "newton_cold")
+        np.testing.assert_allclose(a.q, b.q, rtol=0, atol=1e-12 * b.force_scale)
+    assert not np.array_equal(ref_b.states, a.states)  # the middle step's piece differs
