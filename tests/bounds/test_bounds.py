@@ -272,6 +272,7 @@ def test_ill_conditioned_K():
     check_certificate(a)
 
 
+@pytest.mark.slow  # (9 s; the default run keeps the 400-node and smaller certificates)
 def test_n600_certified():
     """A fast stand-in for the N = 2000 run in the default suite: every LP certified, the lam2
     certificate checked independently, and lam1 the upper end of its limiting interval."""

@@ -297,7 +297,7 @@ def test_walk_maximise_matches_linprog(seed, n, dup):
     assert long_walks
 
 
-@pytest.mark.parametrize("n,seed", [(120, 2), (200, 3)])
+@pytest.mark.parametrize("n,seed", [(120, 2), pytest.param(200, 3, marks=pytest.mark.slow)])
 def test_capped_batches_stopped_by_a_lower_incumbent(n, seed, monkeypatch):
     """Short walks (most rows go to capped LPs) from an unscreened start: a capped LP that
     lowers the incumbent ends its batch, and the rows still running are decided again at the
