@@ -96,10 +96,11 @@ class ActiveSet:
         so with a unique step answer it is the one the iteration from the guess ends with (the
         kernel's probe, :func:`.kernel._probe`).  No factor is computed for a prediction."""
         key = g.tobytes()
-        if np.any(g != STICK):
+        if g.any():  # (STICK = 0)
             F = self._cache.get(key)
             if F is None:
                 return None
+            self._keep_rows(F)  # its reactions by one product with the kept rows of K
             z = self._lu_solve(F, q0, p0)
             q, p = self._reactions(z, q0, p0, self._last_factor)
         else:
@@ -184,8 +185,10 @@ class ActiveSet:
             bad = ~allowed[np.arange(n), s]
             s[bad] = np.argmax(allowed[bad], axis=1)
         self._counters = dict(factorizations=0, updates=0, cache_hits=0)
-        if step and prediction is not None and not np.array_equal(prediction, s):
-            sol = self._probe(np.asarray(prediction, np.int8), q0, p0, scale, ft, dtol)
+        if step and prediction is not None:
+            prediction = np.asarray(prediction, np.int8)
+        if step and prediction is not None and prediction.tobytes() != s.tobytes():
+            sol = self._probe(prediction, q0, p0, scale, ft, dtol)
             if sol is not None:
                 return sol
         visited = set()

@@ -137,7 +137,7 @@ class StepSolver(FactorCache, ActiveSet, Fallbacks):
         self.f = np.asarray(system.friction, float)
         self.K = system.K
         self.diag = system.diagonal()
-        self._getrs = get_lapack_funcs("getrs", (self.diag,))
+        self._getrs, self._getrf = get_lapack_funcs(("getrs", "getrf"), (self.diag,))
         self._last_factor = None
         self._all_allowed = np.ones((n, 4), bool)
         self._none_forced = np.zeros(n, bool)

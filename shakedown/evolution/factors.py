@@ -72,7 +72,13 @@ class FactorCache:
         cols = np.asarray(cols, int)
         if self.sparse and not self.schur:
             return schur_step.assignment_rows(self.K, n, coef, jv, jw, cols)
-        out = self.K[np.ix_(np.concatenate([jv, n + jw]), cols)]  # cost ~ the output's size
+        rows = np.concatenate([jv, n + jw])
+        if isinstance(self.K, np.ndarray):  # two takes: the same gather, cheaper than np.ix_
+            out = self.K.take(rows, axis=0).take(cols, axis=1)
+            if jv.size:
+                out[:jv.size] += coef[:, None] * self.K.take(n + jv, axis=0).take(cols, axis=1)
+            return out
+        out = self.K[np.ix_(rows, cols)]  # cost ~ the output's size
         if jv.size:
             out[:jv.size] += coef[:, None] * self.K[np.ix_(n + jv, cols)]
         return out
@@ -90,9 +96,13 @@ class FactorCache:
             return self._factor_sparse(s, key, free, coef, jv, jw, Ms)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            lu = sla.lu_factor(Ms, check_finite=False)
             anorm = np.abs(Ms).sum(axis=0).max()
-            rcond = dgecon(lu[0], anorm, norm="1")[0]
+            # LAPACK getrf as scipy's lu_factor calls it (without its per-call wrapper)
+            lu_, piv, info = self._getrf(Ms, overwrite_a=False)
+            if info < 0:
+                raise ValueError(f"getrf: illegal value in argument {-info}")
+            lu = (lu_, piv)
+            rcond = dgecon(lu_, anorm, norm="1")[0]
         self.totals["factorizations"] += 1
         self._counters["factorizations"] += 1
         if not np.isfinite(rcond) or rcond < 1e-14:
