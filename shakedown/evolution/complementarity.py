@@ -216,7 +216,7 @@ class StepSolver(FactorCache, ActiveSet, Fallbacks):
             q0, p0 = base
         scale = float(np.abs(np.concatenate((q_w, p_w, q0, p0))).max())
         scale = scale if scale > 0 else 1.0
-        if not verify and guess is not None and not self.kernel and not np.any(guess):
+        if not verify and guess is not None and not self.kernel and not guess.any():
             kept = self._stick_step(v_prev, q0, p0, scale)
             if kept is not None:
                 return kept

@@ -223,7 +223,7 @@ class FactorCache:
         self._last_factor = None
         if self.kernel and _kernel.HAVE_KERNEL:
             return self._kernel_solve(s, q0, p0, scale)
-        if not np.any(s != STICK):
+        if not s.any():  # all stick (STICK = 0)
             return np.zeros(2 * n)
         key = s.tobytes()
         F = self._cache.get(key)
@@ -301,7 +301,7 @@ class FactorCache:
         over consecutive steps, or the same step of the next period on the way to a steady
         cycle) is worth one LU so that later visits are plain cache hits.
         """
-        if key in self._cache or not np.any(s != STICK) or self._last_factor in (_KERNEL,
+        if key in self._cache or not s.any() or self._last_factor in (_KERNEL,
                                                                                  _SCHUR):
             return
         count = self._accepted.get(key, 0) + 1
