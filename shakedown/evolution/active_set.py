@@ -43,27 +43,47 @@ class ActiveSet:
         if cand.max() <= 1.0:
             return None
         target = np.argmax(cand, axis=0).astype(np.int8)
-        return cand[target, np.arange(self.n)], target
+        return cand[target, self._node_range], target
+
+    def _sign_layout(self, s):
+        """Per-assignment data of :meth:`_step_candidates` (cached by assignment): the sign of
+        the slip in the stick row (N,), the separated nodes (N,) and the (4, N) mask of the
+        checks that do not apply."""
+        key = s.tobytes()
+        lay = self._sign_layouts.get(key)
+        if lay is None:
+            isS, isO = s == STICK, s == SEPARATED
+            sgn = np.where(s == FORWARD, -1.0, 1.0)
+            off = np.zeros((4, self.n), bool)
+            off[STICK] = isS
+            off[FORWARD:SEPARATED] = ~isS
+            off[SEPARATED] |= isO
+            if len(self._sign_layouts) >= 65536:
+                self._sign_layouts.clear()
+            lay = self._sign_layouts[key] = (sgn, isO, off)
+        return lay
 
     def _step_candidates(self, s, z, q, p, ft, dtol):
         """The (4, N) normalised violations of the step problem's signs (> 1: violated; < -1:
-        held by more than the tolerance; ``-inf`` where a check does not apply)."""
+        held by more than the tolerance; ``-inf`` where a check does not apply).
+
+        Rows: stick ``-dv/dtol`` (forward), ``dv/dtol`` (backward), ``-w/dtol`` (separated);
+        forward ``-(f p + q)/ft``, backward ``(q - f p)/ft`` (from stick); separated ``-p/ft``
+        (from a contact state).  Computed as ``[f p + q, f p - q, p] / (-ft)`` in one division
+        (the same floating-point values, IEEE negation being exact), the per-assignment masks
+        cached by :meth:`_sign_layout` (a few numpy calls per step at N = 100, issue 25)."""
         n = self.n
+        sgn, isO, off = self._sign_layout(s)
         fp = self.f * p
         cand = np.empty((4, n))
-        np.divide(p, -ft, out=cand[SEPARATED])
         np.add(fp, q, out=cand[FORWARD])
-        cand[FORWARD] /= -ft
-        np.subtract(q, fp, out=cand[BACKWARD])
-        cand[BACKWARD] /= ft
-        np.divide(z[:n], dtol[:n], out=cand[STICK])
-        isS = s == STICK
-        isO = s == SEPARATED
-        cand[STICK][s == FORWARD] *= -1.0
-        cand[STICK][isO] = -z[n:][isO] / dtol[n:][isO]
-        cand[STICK][isS] = -np.inf
-        cand[FORWARD:SEPARATED, ~isS] = -np.inf
-        cand[SEPARATED][isO] = -np.inf
+        np.subtract(fp, q, out=cand[BACKWARD])
+        cand[SEPARATED] = p
+        np.divide(cand[FORWARD:], -ft, out=cand[FORWARD:])
+        zd = z / dtol
+        np.multiply(sgn, zd[:n], out=cand[STICK])
+        np.negative(zd[n:], out=cand[STICK], where=isO)
+        np.putmask(cand, off, -np.inf)
         return cand
 
     def _probe(self, g, q0, p0, scale, ft, dtol):
@@ -76,10 +96,11 @@ class ActiveSet:
         so with a unique step answer it is the one the iteration from the guess ends with (the
         kernel's probe, :func:`.kernel._probe`).  No factor is computed for a prediction."""
         key = g.tobytes()
-        if np.any(g != STICK):
+        if g.any():  # (STICK = 0)
             F = self._cache.get(key)
             if F is None:
                 return None
+            self._keep_rows(F)  # its reactions by one product with the kept rows of K
             z = self._lu_solve(F, q0, p0)
             q, p = self._reactions(z, q0, p0, self._last_factor)
         else:
@@ -107,12 +128,20 @@ class ActiveSet:
         dv, w = z[:n], z[n:]
         f = self.f
         if allowed is None:  # the step problem: x / ds = x K_jj / scale, min commutes
+            # the three pairs (w, p), (dv+, f p + q), (dv-, f p - q) as rows of (3, N) arrays
+            x = np.empty((3, n))
+            y = np.empty((3, n))
             d = self.diag
-            fp = f * p
-            a = dv * d[:n]
-            r = np.abs(np.minimum(w * d[n:], p)).max(initial=0.0)
-            r = max(r, np.abs(np.minimum(np.maximum(a, 0.0), fp + q)).max(initial=0.0))
-            r = max(r, np.abs(np.minimum(np.maximum(-a, 0.0), fp - q)).max(initial=0.0))
+            np.multiply(w, d[n:], out=x[0])
+            np.multiply(dv, d[:n], out=x[1])
+            np.negative(x[1], out=x[2])
+            np.maximum(x[1:], 0.0, out=x[1:])
+            y[0] = p
+            np.multiply(f, p, out=y[1])
+            np.subtract(y[1], q, out=y[2])
+            y[1] += q
+            np.minimum(x, y, out=x)
+            r = np.abs(x, out=x).max(initial=0.0)
             return float(r / scale)
         ds = scale / self.diag
         xs = (w / ds[n:], np.maximum(dv, 0) / ds[:n], np.maximum(-dv, 0) / ds[:n])
@@ -156,8 +185,10 @@ class ActiveSet:
             bad = ~allowed[np.arange(n), s]
             s[bad] = np.argmax(allowed[bad], axis=1)
         self._counters = dict(factorizations=0, updates=0, cache_hits=0)
-        if step and prediction is not None and not np.array_equal(prediction, s):
-            sol = self._probe(np.asarray(prediction, np.int8), q0, p0, scale, ft, dtol)
+        if step and prediction is not None:
+            prediction = np.asarray(prediction, np.int8)
+        if step and prediction is not None and prediction.tobytes() != s.tobytes():
+            sol = self._probe(prediction, q0, p0, scale, ft, dtol)
             if sol is not None:
                 return sol
         visited = set()

@@ -137,10 +137,12 @@ class StepSolver(FactorCache, ActiveSet, Fallbacks):
         self.f = np.asarray(system.friction, float)
         self.K = system.K
         self.diag = system.diagonal()
-        self._getrs = get_lapack_funcs("getrs", (self.diag,))
+        self._getrs, self._getrf = get_lapack_funcs(("getrs", "getrf"), (self.diag,))
         self._last_factor = None
         self._all_allowed = np.ones((n, 4), bool)
         self._none_forced = np.zeros(n, bool)
+        self._node_range = np.arange(n)
+        self._sign_layouts: dict[bytes, tuple] = {}
         self._counters = dict(factorizations=0, updates=0, cache_hits=0)
         self.feas_tol = float(feas_tol)
         self.max_iter = 2 * n + 20 if max_iter is None else int(max_iter)
@@ -212,10 +214,9 @@ class StepSolver(FactorCache, ActiveSet, Fallbacks):
             p0 = p_w + self.Bt @ v_prev
         else:
             q0, p0 = base
-        scale = float(max(np.abs(q_w).max(), np.abs(p_w).max(), np.abs(q0).max(),
-                          np.abs(p0).max()))
+        scale = float(np.abs(np.concatenate((q_w, p_w, q0, p0))).max())
         scale = scale if scale > 0 else 1.0
-        if not verify and guess is not None and not self.kernel and not np.any(guess):
+        if not verify and guess is not None and not self.kernel and not guess.any():
             kept = self._stick_step(v_prev, q0, p0, scale)
             if kept is not None:
                 return kept

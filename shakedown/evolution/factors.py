@@ -72,7 +72,13 @@ class FactorCache:
         cols = np.asarray(cols, int)
         if self.sparse and not self.schur:
             return schur_step.assignment_rows(self.K, n, coef, jv, jw, cols)
-        out = self.K[np.ix_(np.concatenate([jv, n + jw]), cols)]  # cost ~ the output's size
+        rows = np.concatenate([jv, n + jw])
+        if isinstance(self.K, np.ndarray):  # two takes: the same gather, cheaper than np.ix_
+            out = self.K.take(rows, axis=0).take(cols, axis=1)
+            if jv.size:
+                out[:jv.size] += coef[:, None] * self.K.take(n + jv, axis=0).take(cols, axis=1)
+            return out
+        out = self.K[np.ix_(rows, cols)]  # cost ~ the output's size
         if jv.size:
             out[:jv.size] += coef[:, None] * self.K[np.ix_(n + jv, cols)]
         return out
@@ -90,9 +96,13 @@ class FactorCache:
             return self._factor_sparse(s, key, free, coef, jv, jw, Ms)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            lu = sla.lu_factor(Ms, check_finite=False)
             anorm = np.abs(Ms).sum(axis=0).max()
-            rcond = dgecon(lu[0], anorm, norm="1")[0]
+            # LAPACK getrf as scipy's lu_factor calls it (without its per-call wrapper)
+            lu_, piv, info = self._getrf(Ms, overwrite_a=False)
+            if info < 0:
+                raise ValueError(f"getrf: illegal value in argument {-info}")
+            lu = (lu_, piv)
+            rcond = dgecon(lu_, anorm, norm="1")[0]
         self.totals["factorizations"] += 1
         self._counters["factorizations"] += 1
         if not np.isfinite(rcond) or rcond < 1e-14:
@@ -213,7 +223,7 @@ class FactorCache:
         self._last_factor = None
         if self.kernel and _kernel.HAVE_KERNEL:
             return self._kernel_solve(s, q0, p0, scale)
-        if not np.any(s != STICK):
+        if not s.any():  # all stick (STICK = 0)
             return np.zeros(2 * n)
         key = s.tobytes()
         F = self._cache.get(key)
@@ -291,7 +301,7 @@ class FactorCache:
         over consecutive steps, or the same step of the next period on the way to a steady
         cycle) is worth one LU so that later visits are plain cache hits.
         """
-        if key in self._cache or not np.any(s != STICK) or self._last_factor in (_KERNEL,
+        if key in self._cache or not s.any() or self._last_factor in (_KERNEL,
                                                                                  _SCHUR):
             return
         count = self._accepted.get(key, 0) + 1

@@ -265,9 +265,10 @@ def _implicit_cycles(solver, c, tracks, qw, pw, load, lam):
     alive = [int(i) for i in alive]
     for j in range(n_steps if alive else 0):
         bases = [tracks[i].base for i in alive]
-        res = solve_many(solver, V[alive, j], qw[j], pw[j], guesses[alive], Q0[alive],
-                         P0[alive], bases, [None if pred[i] is None else pred[i][j]
-                                            for i in alive])
+        ia = np.array(alive)  # one index array for the four gathers
+        res = solve_many(solver, V[ia, j], qw[j], pw[j], guesses[ia], Q0[ia],
+                         P0[ia], bases, [None if pred[i] is None else pred[i][j]
+                                         for i in alive])
         for i, b in zip(alive, bases, strict=True):
             tracks[i].base = b
         keep = []
