@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from test_cone_dense_ipm import random_3d, random_load  # (tests/bounds on the path)
 
 import shakedown as sd
 from shakedown.bounds.cones.data import cone_data
@@ -23,22 +24,6 @@ from shakedown.bounds.cones.dual import bound_of, certified_bound, coupling_norm
 from shakedown.bounds.cones.engine import cone_bounds
 from shakedown.bounds.cones.socp import LAM_CAP, dual_bound, naive_bound
 from shakedown.model.verified import certified_lower_eig, certified_upper_eig
-
-
-def random_3d(n, seed, friction=0.4):
-    rng = np.random.default_rng(seed)
-    M = rng.normal(size=(3 * n, 3 * n))
-    K = M @ M.T + 3 * n * np.eye(3 * n)
-    return sd.DiscreteSystem(K[: 2 * n, : 2 * n], K[: 2 * n, 2 * n:], K[2 * n:, 2 * n:],
-                             friction=friction, dim=3)
-
-
-def random_load(n, seed):
-    rng = np.random.default_rng(seed)
-    return sd.LoadCycle.from_harmonics(
-        q0=0.2 * n * rng.normal(size=(n, 2)), p0=n * (1 + rng.random(n)),
-        q_cos=n * rng.normal(size=(n, 2)), q_sin=n * rng.normal(size=(n, 2)),
-        p_cos=0.2 * n * rng.normal(size=n), p_sin=0.2 * n * rng.normal(size=n))
 
 
 @cache

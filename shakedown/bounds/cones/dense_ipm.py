@@ -119,8 +119,10 @@ class _Cuts:
         du = -(du + (self.E.T @ y).reshape(self.n, 2))
         return du, vc - float(np.einsum("mc,mc->", self.col, v))
 
-    def normal_matrix(self, Hm, hc):
-        """``G^T diag(Hm, hc) G`` (2N + 1, upper triangle valid) for 3 x 3 blocks ``Hm``."""
+    def normal_matrix(self, Hm, hc, *, signed=False):
+        """``G^T diag(Hm, hc) G`` (2N + 1, upper triangle valid) for 3 x 3 blocks ``Hm``;
+        ``signed``: ``Hm`` symmetric, possibly indefinite (the ``E^T diag(p) E`` part by two
+        rank-k updates, for ``p >= 0`` and ``p < 0``), the matrix full (:mod:`.ipm_split`)."""
         n, nodes = self.n, self.nodes
 
         def per_node(w):
@@ -133,9 +135,14 @@ class _Cuts:
         g = per_node(Hcol[:, 0])
         k = np.column_stack([per_node(Hcol[:, 1]), per_node(Hcol[:, 2])])
         ll = float(np.einsum("ma,ma->", Hcol, self.col)) + hc
-        Es = np.sqrt(p)[:, None] * self.E
         Nm = np.zeros((2 * n + 1, 2 * n + 1), order="F")
-        Nm[: 2 * n, : 2 * n] = dsyrk(1.0, Es, trans=1, lower=0)
+        if signed:
+            B = Nm[: 2 * n, : 2 * n]
+            B[:] = dsyrk(1.0, np.sqrt(np.maximum(p, 0))[:, None] * self.E, trans=1, lower=0)
+            B -= dsyrk(1.0, np.sqrt(np.maximum(-p, 0))[:, None] * self.E, trans=1, lower=0)
+            B[:] = np.triu(B) + np.triu(B, 1).T
+        else:
+            Nm[: 2 * n, : 2 * n] = dsyrk(1.0, np.sqrt(p)[:, None] * self.E, trans=1, lower=0)
         ER = self.ET_rep * r.reshape(-1)[None, :]
         Nm[: 2 * n, : 2 * n] += ER + ER.T
         i = np.arange(n)
@@ -144,6 +151,8 @@ class _Cuts:
         Nm[2 * i + 1, 2 * i] += U[:, 1]
         Nm[2 * i + 1, 2 * i + 1] += U[:, 2]
         Nm[: 2 * n, 2 * n] = self.E.T @ g + k.reshape(-1)
+        if signed:
+            Nm[2 * n, : 2 * n] = Nm[: 2 * n, 2 * n]
         Nm[2 * n, 2 * n] = ll
         return Nm
 

@@ -28,7 +28,6 @@ import warnings
 
 import numpy as np
 import scipy.linalg as sla
-from scipy.linalg.blas import dsyrk
 
 #: A cone's rank-one part is split off when ``w0^2`` exceeds this.
 SPLIT_W0SQ = 1e2
@@ -53,39 +52,6 @@ def split_parts(W):
     eta2 = np.where(ok, eta2, 1.0)
     w = row / np.sqrt(eta2)[:, None]
     return 1.0 / eta2, w * _J, np.where(ok, w[:, 0] ** 2, 0.0)
-
-
-def normal_matrix_signed(G, Hm, hc):
-    """``G^T diag(Hm, hc) G`` (2N + 1, full) for symmetric, possibly indefinite 3 x 3 ``Hm``
-    (the ``E^T diag(p) E`` part by two rank-k updates, for ``p >= 0`` and ``p < 0``)."""
-    n, nodes = G.n, G.nodes
-
-    def per_node(x):
-        return np.bincount(nodes, weights=x, minlength=n)
-
-    Hcol = np.einsum("mab,mb->ma", Hm, G.col)
-    p = per_node(Hm[:, 0, 0])
-    r = np.column_stack([per_node(Hm[:, 0, 1]), per_node(Hm[:, 0, 2])])
-    U = np.stack([per_node(Hm[:, 1, 1]), per_node(Hm[:, 1, 2]), per_node(Hm[:, 2, 2])], 1)
-    g = per_node(Hcol[:, 0])
-    k = np.column_stack([per_node(Hcol[:, 1]), per_node(Hcol[:, 2])])
-    Nm = np.zeros((2 * n + 1, 2 * n + 1), order="F")
-    Nm[: 2 * n, : 2 * n] = dsyrk(1.0, np.sqrt(np.maximum(p, 0))[:, None] * G.E, trans=1, lower=0)
-    Nm[: 2 * n, : 2 * n] -= dsyrk(1.0, np.sqrt(np.maximum(-p, 0))[:, None] * G.E, trans=1,
-                                  lower=0)
-    Nm[: 2 * n, : 2 * n] = np.triu(Nm[: 2 * n, : 2 * n]) + np.triu(Nm[: 2 * n, : 2 * n], 1).T
-    ER = G.ET_rep * r.reshape(-1)[None, :]
-    Nm[: 2 * n, : 2 * n] += ER + ER.T
-    i = np.arange(n)
-    Nm[2 * i, 2 * i] += U[:, 0]
-    Nm[2 * i, 2 * i + 1] += U[:, 1]
-    Nm[2 * i + 1, 2 * i] += U[:, 1]
-    Nm[2 * i + 1, 2 * i + 1] += U[:, 2]
-    col = G.E.T @ g + k.reshape(-1)
-    Nm[: 2 * n, 2 * n] = col
-    Nm[2 * n, : 2 * n] = col
-    Nm[2 * n, 2 * n] = float(np.einsum("ma,ma->", Hcol, G.col)) + hc
-    return Nm
 
 
 def adjoint_columns(G, V):
@@ -115,7 +81,7 @@ class SplitSolver:
             idx = np.sort(idx[np.argsort(big)[::-1][:room]])
         H0 = Hm.copy()
         H0[idx] = ieta2[idx, None, None] * np.diag(-_J)[None]
-        N0 = normal_matrix_signed(G, H0, hc)
+        N0 = G.normal_matrix(H0, hc, signed=True)
         a = wh[idx] * np.sqrt(2.0 * ieta2[idx])[:, None]  # W_m^-2 = H0_m + a a^T
         Uc = adjoint_columns(G, (idx, a))
         self.G, self.H0, self.idx, self.a = G, H0, idx, a
