@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import json
 import os
+import threading
 import time
 from dataclasses import dataclass
 from functools import lru_cache
@@ -44,7 +45,7 @@ from .runs import run_row
 from .safe_files import make_folder, refuse_link, write_atomic
 from .spec import _SAMPLER_FIELDS, SweepSpec
 from .tables import KEY, open_store
-from .workers import Workers
+from .workers import Workers, start_method
 
 __all__ = ["SweepResult", "lam_grid", "run_sweep", "realisation_model", "study_tasks"]
 
@@ -242,27 +243,35 @@ class SweepResult:
                     wall_seconds=self.wall_seconds)
 
 
-#: Estimated work (runs x nodes^2) below which a study runs in this process by default: the
-#: built-in default study (144 runs of 100 cracks: 1.44e6) costs about 3 s of CPU in its runs
-#: with the compiled kernel, while each worker process costs about 2.5 s of CPU to start (its
-#: imports), so for studies up to a few times that size the pool costs more than it saves
+#: Estimated work (runs x nodes^2) below which a study runs in this process by default, when
+#: worker processes are spawned: the built-in default study (144 runs of 100 cracks: 1.44e6)
+#: costs about 3 s of CPU in its runs with the compiled kernel (14 s with steps in Python),
+#: while each spawned worker costs about 2.5 s of CPU to start (its imports), so for studies up
+#: to a few times that size such a pool costs more than it saves
 #: (``benchmarks/RESULTS_first_run.md``, issue 25).
 SMALL_STUDY = 4.0e6
+#: The same threshold when the workers are forked (:func:`~.workers.start_method`): a forked
+#: worker starts in milliseconds with this process's imports, so a study of about a second of
+#: CPU already gains from every core (the default study: 13-14 s wall against 17 s in one
+#: process on an idle 2-core machine with a cold numba cache).
+SMALL_STUDY_FORK = 2.0e5
 
 
 def auto_workers(spec: SweepSpec) -> int:
     """The default number of local worker processes of ``spec``'s study: 1 (this process) when
-    its estimated work (runs x nodes^2) is below :data:`SMALL_STUDY`, else every core."""
+    its estimated work (runs x nodes^2) is below :data:`SMALL_STUDY` (:data:`SMALL_STUDY_FORK`
+    when the workers would be forked), else every core."""
     n = spec.source.n_nodes if spec.source is not None else spec.n_cracks
     n_lams = len(spec.lams) if spec.lams != "auto" else (
         spec.n_lams + spec.n_band + spec.n_adj + spec.n_refine)
     work = float(spec.n_realisations) * n_lams * spec.n_states * float(n) ** 2
-    return 1 if work < SMALL_STUDY else int(os.cpu_count() or 1)
+    small = SMALL_STUDY_FORK if start_method() == "fork" else SMALL_STUDY
+    return 1 if work < small else int(os.cpu_count() or 1)
 
 
 def run_sweep(spec: SweepSpec, store, *, n_workers: int | None = None, scheduler=None,
               progress: bool = True, format: str | None = None,
-              confidence: float = 0.95) -> SweepResult:
+              confidence: float = 0.95, meanwhile=None) -> SweepResult:
     """Run (or resume) the crack-network study, results appended to ``store`` as they arrive.
 
     Parameters
@@ -283,6 +292,11 @@ def run_sweep(spec: SweepSpec, store, *, n_workers: int | None = None, scheduler
         Store format (default Parquet when pyarrow is installed).
     confidence : float
         Level of the bands over realisations.
+    meanwhile : callable, optional
+        Called without arguments in a thread of this process once the worker processes have
+        started, while they run the tasks (e.g. the imports that the plots will need: this
+        process only waits then); not called when the tasks run in this process.  What it
+        raises is ignored.
 
     Returns
     -------
@@ -298,6 +312,9 @@ def run_sweep(spec: SweepSpec, store, *, n_workers: int | None = None, scheduler
     sub = (lambda name: store / f"{name}.csv") if format == "csv" else (lambda name: store / name)
     done = []
     with Workers(n_workers, scheduler) as workers:  # one pool for every phase
+        if meanwhile is not None and workers.kind != "inline":
+            threading.Thread(target=_quietly, args=(meanwhile,), daemon=True,
+                             name="shakedown-meanwhile").start()
         def phase(tasks, name):
             out = run_tasks(tasks, open_store(sub(name), format), desc=name, workers=workers,
                             progress=progress)
@@ -323,6 +340,13 @@ def run_sweep(spec: SweepSpec, store, *, n_workers: int | None = None, scheduler
         n_resumed=sum(d.n_resumed for d in done), n_run=sum(d.n_run for d in done),
         wall_seconds=time.perf_counter() - t0,
         task_seconds=pd.concat([d.seconds for d in done]), confidence=confidence)
+
+
+def _quietly(func) -> None:
+    try:
+        func()
+    except Exception:  # noqa: BLE001 - a convenience (e.g. early imports): the caller redoes it
+        pass
 
 
 def _check_spec_file(path: Path, spec: SweepSpec) -> None:

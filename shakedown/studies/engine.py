@@ -91,7 +91,7 @@ def run_tasks(
     progress: bool = True,
     desc: str = "sweep",
     on_error: str = "raise",
-    mp_context: str = "spawn",
+    mp_context: str = "auto",
     max_in_flight: int | None = None,
     flush_interval: float = 0.0,
 ) -> TaskRun:
@@ -119,9 +119,10 @@ def run_tasks(
         :class:`~shakedown.SolverError` naming the task, or record it in
         ``TaskRun.failed`` and go on (it is retried on the next call).
     mp_context : str
-        Start method of the local processes (``"spawn"``: safe with threads in the parent;
+        Start method of the local processes (default ``"auto"``: ``"fork"`` when this process
+        runs no other thread, else ``"spawn"``; :func:`~shakedown.studies.workers.start_method`);
         a script that calls this with ``n_workers > 1`` needs the usual
-        ``if __name__ == "__main__":`` guard).
+        ``if __name__ == "__main__":`` guard.
     max_in_flight : int, optional
         Tasks submitted ahead of completion (default 2 per worker slot).
     flush_interval : float
@@ -160,6 +161,7 @@ def run_tasks(
             if own:
                 workers = Workers(min(n_workers, len(todo)) if scheduler is None else 1,
                                   scheduler, mp_context)
+                workers.start()  # before the progress display's thread (start_method)
             ok = False
             try:
                 _execute(todo, st, workers, progress, desc, on_error, max_in_flight,

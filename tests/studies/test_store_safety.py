@@ -168,7 +168,8 @@ def _alive(pid: int) -> bool:
 
 
 @pytest.mark.skipif(not Path("/proc/self/task").exists(), reason="needs Linux /proc")
-def test_workers_exit_when_the_main_process_is_killed(tmp_path):
+@pytest.mark.parametrize("mp_context", ["auto", "spawn"])
+def test_workers_exit_when_the_main_process_is_killed(tmp_path, mp_context):
     script = textwrap.dedent(f"""
         import sys
         sys.path[:0] = [{str(HERE)!r}, {str(HERE.parents[1])!r}]
@@ -176,7 +177,8 @@ def test_workers_exit_when_the_main_process_is_killed(tmp_path):
         from shakedown.studies.store import Task, run_tasks
         tasks = [Task(f"k{{i}}", pid_then_sleep, (i, {str(tmp_path)!r})) for i in range(4)]
         if __name__ == "__main__":
-            run_tasks(tasks, {str(tmp_path / 'store')!r}, n_workers=2, progress=False)
+            run_tasks(tasks, {str(tmp_path / 'store')!r}, n_workers=2, progress=False,
+                      mp_context={mp_context!r})
     """)
     (tmp_path / "main.py").write_text(script)
     proc = subprocess.Popen([sys.executable, str(tmp_path / "main.py")],
@@ -187,9 +189,9 @@ def test_workers_exit_when_the_main_process_is_killed(tmp_path):
             assert time.time() < deadline, "the workers did not start in 60 s"
             assert proc.poll() is None, "the main process ended early"
             time.sleep(0.1)
-        children = _children(proc.pid)  # the 2 workers and the resource tracker
+        children = _children(proc.pid)  # the 2 workers (and, when spawned, a resource tracker)
         workers = {int(p.read_text()) for p in tmp_path.glob("*.pid")}
-        assert workers <= children and len(children) >= 3
+        assert workers <= children and len(workers) == 2
     finally:
         proc.send_signal(signal.SIGKILL)
         proc.wait()
@@ -229,3 +231,23 @@ def test_cli_takes_the_scheduler_from_set_but_not_from_the_scene_file(tmp_path, 
                  "--set", "sweep.scheduler=\"bogus\""]) == 2
     err = capsys.readouterr().err
     assert "scheduler must be a Dask scheduler address" in err and "may not name" not in err
+
+
+def test_the_auto_start_method_forks_only_a_single_threaded_process():
+    import multiprocessing
+    import threading
+
+    from shakedown.studies.workers import start_method
+
+    assert start_method("spawn") == "spawn" and start_method("forkserver") == "forkserver"
+    can_fork = "fork" in multiprocessing.get_all_start_methods()
+    if threading.active_count() == 1:
+        assert start_method() == ("fork" if can_fork else "spawn")
+    stop = threading.Event()
+    other = threading.Thread(target=stop.wait, daemon=True)
+    other.start()
+    try:
+        assert start_method() == "spawn"  # a forked child would inherit that thread's locks
+    finally:
+        stop.set()
+        other.join()
