@@ -1,7 +1,10 @@
 """Every public module imports on its own, in any order (no import cycles), and the lazy names resolve."""
 
+import functools
+import os
 import subprocess
 import sys
+from concurrent.futures import ThreadPoolExecutor
 
 import pytest
 
@@ -33,12 +36,26 @@ OLD_PATHS = {
 }
 
 
-@pytest.mark.parametrize("old", sorted(OLD_PATHS))
-def test_old_module_paths_still_import(old):
-    code = (f"import warnings; warnings.simplefilter('error'); import sys, importlib; "
+def _old_path_code(old: str) -> str:
+    return (f"import warnings; warnings.simplefilter('error'); import sys, importlib; "
             f"a = importlib.import_module({old!r}); b = importlib.import_module({OLD_PATHS[old]!r}); "
             f"assert a is b, (a, b); assert sys.modules[{old!r}] is b")
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+
+
+@functools.cache
+def _fresh_imports() -> dict:
+    """Every fresh-interpreter import check of this file, run once, as many at once as there are
+    cores (each is a new interpreter importing the package: ~2 s); by code string."""
+    codes = [f"import {m}" for m in MODULES] + [_old_path_code(old) for old in OLD_PATHS]
+    with ThreadPoolExecutor(os.cpu_count() or 1) as pool:
+        runs = pool.map(lambda c: subprocess.run([sys.executable, "-c", c], capture_output=True,
+                                                 text=True), codes)
+        return dict(zip(codes, runs, strict=True))
+
+
+@pytest.mark.parametrize("old", sorted(OLD_PATHS))
+def test_old_module_paths_still_import(old):
+    r = _fresh_imports()[_old_path_code(old)]
     assert r.returncode == 0, r.stderr
 
 
@@ -54,7 +71,7 @@ def test_public_names_of_version_0_1():
 
 @pytest.mark.parametrize("module", MODULES)
 def test_module_imports_first(module):
-    r = subprocess.run([sys.executable, "-c", f"import {module}"], capture_output=True, text=True)
+    r = _fresh_imports()[f"import {module}"]
     assert r.returncode == 0, r.stderr
 
 
