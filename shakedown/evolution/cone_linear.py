@@ -1,5 +1,6 @@
-"""The linear solve of the 3-D semismooth Newton step (:mod:`.cone_kernel`): LU for small
-reduced systems, block-Jacobi preconditioned restarted GMRES for large ones (numba)."""
+"""The linear solve of the 3-D semismooth Newton step (:mod:`.cone_kernel`): block-Jacobi
+preconditioned restarted GMRES for the reduced systems above ``DENSE_MAX`` unknowns (smaller
+ones by LU in :func:`.cone_reduced._newton_point`), numba."""
 
 from __future__ import annotations
 
@@ -10,21 +11,6 @@ from .kernel_jit import njit
 
 #: Reduced systems up to this size are solved by LU; larger ones by GMRES first (below).
 DENSE_MAX = 64
-
-
-@njit(cache=True)
-def _linear_solve(J, h, states, n, dense_max, x0, eta):
-    """``J x = h``: LU with partial pivoting for ``m <= DENSE_MAX``, else restarted GMRES
-    preconditioned by the inverses of ``J``'s node blocks (2 x 2 slip, 3 x 3 separated) started
-    from ``x0`` (:func:`_krylov` with the residual ``h - J x0`` computed here)."""
-    m = h.size
-    if m <= dense_max:
-        return np.linalg.solve(J, h)
-    Pinv, starts, nb = _preconditioner(J, states, n)
-    r0 = np.empty(m)
-    _residual(J, h, x0, r0)
-    x, ok = _krylov(J, h, r0, x0, eta, np.sqrt(np.sum(h * h)), Pinv, starts, nb, True)
-    return x
 
 
 @njit(cache=True)
@@ -191,4 +177,4 @@ def _precondition(Pinv, starts, nb, v, out):
             out[a0 + a] = acc
 
 
-__all__ = ["DENSE_MAX", "_linear_solve", "_krylov", "_preconditioner", "_block_inverse"]
+__all__ = ["DENSE_MAX", "_krylov", "_preconditioner", "_block_inverse"]

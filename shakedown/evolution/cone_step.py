@@ -175,7 +175,7 @@ class ConeStepSolver:
         Newton iterations per attempt.
     dense_max : int
         Largest reduced Newton system solved by LU directly; larger ones are solved by
-        block-Jacobi preconditioned GMRES first (:func:`.cone_kernel._linear_solve`).
+        block-Jacobi preconditioned GMRES first (:func:`.cone_linear._krylov`).
     """
 
     def __init__(self, system, feas_tol: float = FEAS_TOL, max_iter: int = 60,
