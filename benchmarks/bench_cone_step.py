@@ -11,7 +11,9 @@ siconos  The steps of one period (64 steps, after two settling periods) of a cou
          N-node system (``coupled_system_3d``) solved by this code (warm-started as in
          ``solve_cycles``: from the same step of the previous period; and cold, from zero) and by
          Siconos FC3D solvers (``siconos_fc3d_worker.py`` under ``/usr/bin/python3``: NSGS,
-         NSN_AC, NSN_FB, ADMM; warm-started from the previous step's reactions, and cold),
+         NSN_AC, NSN_FB, ADMM; warm-started from the previous step's reactions, cold, and from
+         this code's own start, the reactions ``r_b + K u0`` of the same step of the previous
+         period: "this code's start", compared with this code's warm time),
          tolerance 1e-12.  The FC3D problem of a step is ``u = W r + q`` with ``W = K_n^-1``
          in the contact frame (normal first), ``q = -W r_b`` (Siconos' convention with De Saxce's
          modified velocity; see ``to_fc3d``).  Reported: medians over the steps of the median
@@ -87,13 +89,16 @@ def siconos_available(python=SICONOS_PYTHON):
     return r.returncode == 0
 
 
-def run_siconos(W, Q, mu, solvers, warm, tol=1e-12, python=SICONOS_PYTHON):
+def run_siconos(W, Q, mu, solvers, warm, tol=1e-12, python=SICONOS_PYTHON, R0=None):
+    """Siconos on the problems ``(W, Q[j])``: from the previous problem's reactions (``warm``),
+    from zero, or from ``R0[j]`` (k, 3N) (contact frame) when given."""
     with tempfile.TemporaryDirectory() as tmp:
         fin, fout = Path(tmp) / "in.npz", Path(tmp) / "out.npz"
-        np.savez(fin, M=W, Q=Q, mu=mu)
+        np.savez(fin, M=W, Q=Q, mu=mu, **({} if R0 is None else dict(R0=R0)))
         env = dict(os.environ, PYTHONPATH="", PYTHONNOUSERSITE="1", OPENBLAS_NUM_THREADS="1")
         cmd = [python, str(WORKER), str(fin), str(fout), "--solvers", ",".join(solvers),
-               "--tol", repr(tol)] + (["--warm"] if warm else [])
+               "--tol", repr(tol)] + (["--warm"] if warm else []) + (
+            ["--given"] if R0 is not None else [])
         subprocess.run(cmd, check=True, env=env)
         with np.load(fout) as d:
             return {k: d[k] for k in d.files}
@@ -168,6 +173,8 @@ def part_siconos(n, lam, repeats, seed=0, baseline=None, solvers=("nsgs", "nsn_a
     slipping = float(np.mean([np.mean(np.hypot(*u[:, :2].T) > 0) for u in U]))
     W, Q, perm = to_fc3d(sol.data.Kn, RB)
     mu = s.friction_xy[:, 0]
+    # the reactions of this code's warm starts (r_b + K u0), in Siconos' contact frame
+    R0 = (RB + np.array(KU0)).reshape(len(RB), -1)[:, perm]
     ours = R.reshape(len(R), -1)
     times = {}  # (who, start, clock) -> list over repeats of per-step arrays
     diffs = {}
@@ -196,9 +203,9 @@ def part_siconos(n, lam, repeats, seed=0, baseline=None, solvers=("nsgs", "nsn_a
                         add(("main", start, "cpu"), d[f"{start}_cpu"])
                         diffs[("main", start)] = (
                             float(np.abs(d[f"{start}_R"] - ours).max() / F), 0)
-            for warm in (True, False):
-                out = run_siconos(W, Q, mu, solvers, warm)
-                start = "warm" if warm else "cold"
+            for start in ("warm", "cold", "this code's start"):
+                out = run_siconos(W, Q, mu, solvers, start == "warm",
+                                  R0=R0 if start == "this code's start" else None)
                 for k in solvers:
                     add((f"Siconos {k.upper()}", start, "wall"), out[f"{k}_time"])
                     add((f"Siconos {k.upper()}", start, "cpu"), out[f"{k}_cpu"])
@@ -364,9 +371,11 @@ def main():
                       "code (CPU) | max diff / F | not converged |", "|---|---|---|---|---|---|---|"]
             who = ["this code"] + (["main"] if a.baseline else []) + [
                 f"Siconos {k.upper()}" for k in r["solvers"]]
-            for start in ("warm", "warm, K u0 computed", "cold"):
-                o = m[("this code", start, "cpu")]
-                for w_ in (who if start != "warm, K u0 computed" else ["this code"]):
+            for start in ("warm", "warm, K u0 computed", "cold", "this code's start"):
+                o = m[("this code", "warm" if start == "this code's start" else start, "cpu")]
+                rows = {"warm, K u0 computed": ["this code"],
+                        "this code's start": [w_ for w_ in who if w_.startswith("Siconos")]}
+                for w_ in rows.get(start, who):
                     t, c = m[(w_, start, "wall")], m[(w_, start, "cpu")]
                     d, bad = r["diffs"][(w_, start)]
                     lines.append(f"| {w_} | {start} | {1e3 * t:.3f} | {1e3 * c:.3f} | "
@@ -374,13 +383,14 @@ def main():
                 if start == "warm, K u0 computed":
                     continue
                 sic = min(m[(w_, start, "cpu")] for w_ in who if w_.startswith("Siconos"))
+                base = "warm" if start == "this code's start" else start
                 summary.append((seed, start, sic / o,
-                                m[("main", start, "cpu")] / o if a.baseline else float("nan")))
+                                m[("main", base, "cpu")] / o if a.baseline else float("nan")))
             lines += ["", f"Load after: {os.getloadavg()}", ""]
         lines += ["### Summary over systems: fastest Siconos solver / this code (CPU per step)", "",
                   "| start | median | worst (smallest) | main / this code (median) |",
                   "|---|---|---|---|"]
-        for start in ("warm", "cold"):
+        for start in ("warm", "cold", "this code's start"):
             x = np.array([q[2] for q in summary if q[1] == start])
             y = np.array([q[3] for q in summary if q[1] == start])
             lines.append(f"| {start} | {np.median(x):.1f}x | {x.min():.1f}x | "

@@ -13,7 +13,8 @@ Input ``IN.npz``: ``M`` (m, m) with ``m = 3 nc`` (contact ``i``: row ``3i`` norm
 ``3i + 2`` tangential), ``Q`` (k, m), ``mu`` (nc,).  Problem ``j``: ``u = M r + Q[j]`` with ``r``
 in the Coulomb cone ``|r_T| <= mu r_N`` and Coulomb's law in De Saxce's form (Siconos'
 FrictionContactProblem, dimension 3).  ``--warm``: problem ``j`` starts from the reactions of
-problem ``j - 1`` (a time-stepping warm start), else from zero.
+problem ``j - 1`` (a time-stepping warm start), else from zero; ``--given``: problem ``j``
+starts from ``R0[j]`` (k, m) of the input (e.g. the start another solver was given).
 
 Output ``OUT.npz``: per solver name ``<s>_r``, ``<s>_u`` (k, m), ``<s>_info`` (k,) (0 =
 converged), ``<s>_time`` (k,) [s] (wall time of the ``fc3d_driver`` call only), ``<s>_cpu`` (k,)
@@ -44,6 +45,7 @@ def main():
     ap.add_argument("--tol", type=float, default=1e-12)
     ap.add_argument("--max-iter", type=int, default=100000)
     ap.add_argument("--warm", action="store_true")
+    ap.add_argument("--given", action="store_true")
     a = ap.parse_args()
     import siconos.numerics as sn
 
@@ -63,7 +65,8 @@ def main():
             so = sn.SolverOptions(sid)
             so.dparam[sn.SICONOS_DPARAM_TOL] = a.tol
             so.iparam[sn.SICONOS_IPARAM_MAX_ITER] = a.max_iter
-            r = r_prev.copy() if a.warm else np.zeros(m)
+            r = (np.array(data["R0"][j], float) if a.given else r_prev.copy() if a.warm
+                 else np.zeros(m))
             u = np.zeros(m)
             t0, c0 = time.perf_counter(), time.process_time()
             info[j] = sn.fc3d_driver(prob, r, u, so)

@@ -24,7 +24,9 @@ vanishes identically), on a separated node ``q+ = 0, p+ = 0``.  The unknowns are
 the slip and separated nodes and the gaps of the separated nodes: a dense system of that size,
 solved by LU with partial pivoting (LAPACK through numba) up to ``DENSE_MAX`` unknowns, beyond by
 GMRES started from the current point to a relative residual tied to the AC residual (an inexact
-Newton method, :func:`.cone_linear._linear_solve`; the stopping test below is unchanged).
+Newton method, :func:`.cone_linear._krylov`; the stopping test below is unchanged).  The reduced
+system, its residual at the current point and the reuse of an iteration's matrix by the next
+one (rows refreshed where the directions moved): :mod:`.cone_reduced`.
 Globalisation: backtracking on the
 merit ``sum |phi|^2`` of the AC residual (in force units) from the Newton point towards the
 current one; the iteration stops when the residual is below ``tol`` of the force scale or stalls.
@@ -37,7 +39,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .cone_linear import DENSE_MAX, _linear_solve
+from .cone_linear import DENSE_MAX
+from .cone_reduced import _newton_point, new_buffers, new_kept
 from .cone_states import SEPARATED, SLIP, STICK
 from .kernel_jit import HAVE_KERNEL, njit
 
@@ -98,157 +101,16 @@ def _classify(r, u, sx, sy, g, rhoT, rhoN, states, phi, nhat, cfac, slack):
 
 
 @njit(cache=True)
-def _unknowns(Kn, states, idx, cs):
-    """``idx`` and ``cs`` of :func:`_gather` (without ``Ks``); returns ``m``."""
-    m = 0
-    for i in range(states.size):
-        if states[i] == SLIP:
-            idx[m], idx[m + 1] = 3 * i, 3 * i + 1
-            m += 2
-        elif states[i] == SEPARATED:
-            idx[m], idx[m + 1], idx[m + 2] = 3 * i, 3 * i + 1, 3 * i + 2
-            m += 3
-    for col in range(m):
-        cs[col] = 1.0 / np.sqrt(max(abs(Kn[idx[col], idx[col]]), 1e-300))
-    return m
-
-
-@njit(cache=True)
-def _gather(Kn, states, idx, cs, Ks):
-    """The unknowns of the current piece ``idx`` (indices into ``u``: slips of the slip nodes,
-    slips and gaps of the separated ones), their column scales ``cs`` (unit diagonal magnitude
-    before pivoting, any units) and ``Ks[3 b + a, col] = Kn[3 i_b + a, idx[col]] cs[col]``
-    (the three rows of ``Kn`` of the ``b``-th slip or separated node ``i_b``, restricted to the
-    unknowns); returns the number of unknowns ``m``."""
-    n = states.size
-    m = _unknowns(Kn, states, idx, cs)
-    b = 0
-    for i in range(n):
-        if states[i] == SLIP or states[i] == SEPARATED:
-            K0, K1, K2 = Kn[3 * i], Kn[3 * i + 1], Kn[3 * i + 2]
-            S0, S1, S2 = Ks[3 * b], Ks[3 * b + 1], Ks[3 * b + 2]
-            for col in range(m):
-                k = idx[col]
-                c = cs[col]
-                S0[col] = K0[k] * c
-                S1[col] = K1[k] * c
-                S2[col] = K2[k] * c
-            b += 1
-    return m
-
-
-@njit(cache=True)
-def _newton_point(Kn, rb, sx, sy, g, rhoT, states, nhat, cfac, unew, dense_max, u, eta, cache,
-                  gathered, expect_more):
-    """The reduced semismooth Newton step of the current piece (see the module docstring):
-    ``unew`` (3N,); returns False when the reduced matrix is singular.  ``u``: the current
-    point (the start of an iterative solve), ``eta``: the forcing term of the linear solve
-    (:func:`.cone_linear._linear_solve`).  ``cache = (idx, cs, Ks)`` of :func:`_gather` and
-    ``gathered`` (N,) the states it was gathered for (``-1``: none): the rows of ``Kn`` are
-    gathered again only when the piece's set of slip and separated nodes changed (the
-    directions ``n``, factors ``c`` and the right-hand side are always those of now), and only
-    when ``expect_more`` (another iteration expected to follow); otherwise the reduced matrix is
-    assembled from ``Kn`` directly (the gather would cost more than it saves)."""
-    n = g.size
-    idx, cs, Ks = cache
-    same = True
-    for i in range(n):
-        if states[i] != gathered[i]:
-            same = False
-            break
-    if same:
-        m = 0
-        for i in range(n):
-            m += 2 if states[i] == SLIP else (3 if states[i] == SEPARATED else 0)
-    elif expect_more:
-        m = _gather(Kn, states, idx, cs, Ks)
-        gathered[:] = states
-        same = True
-    else:  # the cache keeps the gather of ``gathered`` (its idx and cs too)
-        idx, cs = np.empty(3 * n, np.int64), np.empty(3 * n)
-        m = _unknowns(Kn, states, idx, cs)
-    unew[:] = 0.0
-    if m == 0:
-        return True
-    J = np.empty((m, m))
-    h = np.empty(m)
-    row = 0
-    b = 0
-    for i in range(n):
-        if states[i] == SLIP:
-            nx, ny = nhat[2 * i], nhat[2 * i + 1]
-            c = cfac[i]
-            # M = I - c P, P = I - n n^T; rows: M F^-1 K_q - g n K_p (+ c rho P F on own dv)
-            pxx, pxy, pyy = 1.0 - nx * nx, -nx * ny, 1.0 - ny * ny
-            m11, m12, m22 = 1.0 - c * pxx, -c * pxy, 1.0 - c * pyy
-            a1, a2 = m11 / sx[i], m12 / sy[i]
-            b1, b2 = m12 / sx[i], m22 / sy[i]
-            gx, gy = g[i] * nx, g[i] * ny
-            kx, ky, kp = 3 * i, 3 * i + 1, 3 * i + 2
-            J0, J1 = J[row], J[row + 1]
-            if same:
-                Kx, Ky, Kp = Ks[3 * b], Ks[3 * b + 1], Ks[3 * b + 2]
-                for col in range(m):
-                    J0[col] = a1 * Kx[col] + a2 * Ky[col] - gx * Kp[col]
-                    J1[col] = b1 * Kx[col] + b2 * Ky[col] - gy * Kp[col]
-            else:
-                Kx, Ky, Kp = Kn[kx], Kn[ky], Kn[kp]
-                for col in range(m):
-                    k = idx[col]
-                    J0[col] = (a1 * Kx[k] + a2 * Ky[k] - gx * Kp[k]) * cs[col]
-                    J1[col] = (b1 * Kx[k] + b2 * Ky[k] - gy * Kp[k]) * cs[col]
-            h[row] = -(a1 * rb[kx] + a2 * rb[ky] - gx * rb[kp])
-            h[row + 1] = -(b1 * rb[kx] + b2 * rb[ky] - gy * rb[kp])
-            cr = c * rhoT[i]
-            # the own slip columns sit at the own rows (rows and columns in the same order)
-            J[row, row] += cr * pxx * sx[i] * cs[row]
-            J[row + 1, row] += cr * pxy * sx[i] * cs[row]
-            J[row, row + 1] += cr * pxy * sy[i] * cs[row + 1]
-            J[row + 1, row + 1] += cr * pyy * sy[i] * cs[row + 1]
-            row += 2
-            b += 1
-        elif states[i] == SEPARATED:
-            for a in range(3):
-                if same:
-                    J[row, :] = Ks[3 * b + a, :m]
-                else:
-                    Ka = Kn[3 * i + a]
-                    for col in range(m):
-                        J[row, col] = Ka[idx[col]] * cs[col]
-                h[row] = -rb[3 * i + a]
-                row += 1
-            b += 1
-    x0 = np.empty(m)
-    for col in range(m):
-        x0[col] = u[idx[col]] / cs[col]
-    x = _linear_solve(J, h, states, n, dense_max, x0, eta)
-    for col in range(m):
-        v = x[col] * cs[col]
-        if not np.isfinite(v):
-            return False
-        unew[idx[col]] = v
-    return True
-
-
-@njit(cache=True)
 def newton(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, dense_max=DENSE_MAX,
            slack=0.0, scale=0.0, given_r=False):
-    """:func:`newton_cached` with a fresh cache (arguments and returns as there)."""
-    n = g.size
+    """:func:`newton_cached` with fresh buffers (arguments and returns as there)."""
     return newton_cached(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, dense_max,
-                         slack, scale, given_r, new_cache(n), np.full(n, -1, np.int8))
-
-
-@njit(cache=True)
-def new_cache(n):
-    """Empty buffers ``(idx, cs, Ks)`` of :func:`_gather` for ``n`` nodes (with a ``gathered``
-    array ``np.full(n, -1, np.int8)``: nothing gathered yet)."""
-    return np.empty(3 * n, np.int64), np.empty(3 * n), np.empty((3 * n, 3 * n))
+                         slack, scale, given_r, new_buffers(g.size))
 
 
 @njit(cache=True)
 def newton_cached(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, dense_max, slack,
-                  scale, given_r, cache, gathered):
+                  scale, given_r, buffers):
     """Semismooth Newton on the Alart-Curnier equations from the guess ``u`` (in place).
 
     Parameters
@@ -280,11 +142,8 @@ def newton_cached(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, de
         solve goes below a tenth of ``tol``); ``0``: exact solves.
     given_r : bool
         ``r`` holds the guess's reactions on entry (one product with ``Kn`` saved).
-    cache, gathered : tuple, ndarray of int8, shape (N,)
-        The rows of ``Kn`` restricted to the unknowns of the piece ``gathered`` (buffers of
-        :func:`new_cache`, see :func:`_gather`), updated in place: an iteration (or a later call
-        with the same ``Kn``, e.g. the next step) whose piece has the same slip and separated
-        nodes reuses them.  Valid only with the ``Kn`` they were gathered from.
+    buffers : tuple
+        :func:`.cone_reduced.new_buffers` of ``N`` nodes (the solver's, reused by every call).
 
     Returns
     -------
@@ -304,6 +163,7 @@ def newton_cached(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, de
     cf_try = np.zeros(n)
     dr = np.empty(3 * n)
     zero = np.zeros(3 * n)
+    kept = new_kept(n)
     if not given_r:
         _reactions(Kn, rb, u, r)
     merit = _classify(r, u, sx, sy, g, rhoT, rhoN, states, phi, nhat, cfac, slack)
@@ -314,8 +174,9 @@ def newton_cached(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, de
         it += 1
         res = np.max(np.abs(phi))
         eta = max(min(1e-2, res / scale), 0.1 * tol / res) if scale > 0.0 else 0.0
-        if not _newton_point(Kn, rb, sx, sy, g, rhoT, states, nhat, cfac, unew, dense_max, u,
-                             eta, cache, gathered, res * res > tol * scale):
+        ok, kept = _newton_point(Kn, rb, r, sx, sy, g, rhoT, states, nhat, cfac, unew, dense_max,
+                                 u, eta, buffers, kept)
+        if not ok:
             return SINGULAR, it, np.max(np.abs(phi))
         for k in range(3 * n):  # the Newton direction and its reactions, once
             unew[k] -= u[k]
@@ -390,8 +251,8 @@ def gauss_seidel(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_sweeps, l
     return MAX_ITER, max_sweeps, np.max(np.abs(phi))
 
 
-__all__ = ["newton", "newton_cached", "new_cache", "gauss_seidel", "STICK", "SLIP", "SEPARATED",
-           "HAVE_KERNEL", "CONVERGED", "STALLED", "MAX_ITER", "SINGULAR"]
+__all__ = ["newton", "newton_cached", "new_buffers", "attempt", "gauss_seidel", "STICK", "SLIP",
+           "SEPARATED", "HAVE_KERNEL", "CONVERGED", "STALLED", "MAX_ITER", "SINGULAR"]
 
 
 @njit(cache=True)
@@ -417,3 +278,23 @@ def residuals(Kn, rb, sx, sy, g, kT, kN, u, r, F, equilibrium):
         for j in range(3 * n):
             eq = max(eq, abs(rb[j] + Ku[j] - r[j]))
     return cone / F, direc / (F * F), normal / F, eq / F
+
+
+@njit(cache=True)
+def attempt(Kn, rb, sx, sy, g, rhoT, rhoN, kT, kN, u, r, states, feas_tol, max_iter, dense_max,
+            stick_slack, given_r, buffers, equilibrium):
+    """One Newton attempt of the step and the verification of its answer in one call (the
+    step solver's path, :meth:`~.cone_step.ConeStepSolver.solve_raw`): the force scale ``F =
+    max |rb|`` (1 if zero), :func:`newton_cached` to ``tol = 1e-3 feas_tol F`` with the stick
+    slack ``stick_slack feas_tol F`` and inexact solves at the scale ``F``, then
+    :func:`residuals`.  Arguments as there (``u``, ``r``, ``states`` in place).  Returns
+    ``(code, iterations, F, cone, direction, normal, equilibrium)``."""
+    F = 0.0
+    for k in range(rb.size):
+        F = max(F, abs(rb[k]))
+    F = F if F > 0.0 else 1.0
+    code, it, _ = newton_cached(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, 1e-3 * feas_tol * F,
+                                max_iter, dense_max, stick_slack * feas_tol * F, F, given_r,
+                                buffers)
+    cone, direc, normal, eq = residuals(Kn, rb, sx, sy, g, kT, kN, u, r, F, equilibrium)
+    return code, it, F, cone, direc, normal, eq

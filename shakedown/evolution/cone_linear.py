@@ -1,5 +1,6 @@
-"""The linear solve of the 3-D semismooth Newton step (:mod:`.cone_kernel`): LU for small
-reduced systems, block-Jacobi preconditioned restarted GMRES for large ones (numba)."""
+"""The linear solve of the 3-D semismooth Newton step (:mod:`.cone_kernel`): block-Jacobi
+preconditioned restarted GMRES for the reduced systems above ``DENSE_MAX`` unknowns (smaller
+ones by LU in :func:`.cone_reduced._newton_point`), numba."""
 
 from __future__ import annotations
 
@@ -13,19 +14,11 @@ DENSE_MAX = 64
 
 
 @njit(cache=True)
-def _linear_solve(J, h, states, n, dense_max, x0, eta):
-    """``J x = h``: LU with partial pivoting for ``m <= DENSE_MAX``, else restarted GMRES
-    preconditioned by the inverses of ``J``'s node blocks (2 x 2 slip, 3 x 3 separated) started
-    from ``x0`` (the current Newton point: the answer of a warm start is near it), to a residual
-    ``|h - J x| <= max(1e-14 |h|, eta |h - J x0|)`` (``eta``: the forcing term of the inexact
-    Newton method, ``0`` for an exact solve; the Arnoldi estimate of the residual, with a factor
-    2 of margin, ends the solve), with LU when it does not get there in 120
-    iterations (a ``O(m^2)``-per-iteration path for the large, well-conditioned systems where the
-    LU's ``O(m^3)`` dominates the step)."""
-    m = h.size
-    if m <= dense_max:
-        return np.linalg.solve(J, h)
-    # block-Jacobi preconditioner: the inverses of the node blocks in closed form
+def _preconditioner(J, states, n):
+    """The block-Jacobi preconditioner of :func:`_krylov`: ``(Pinv, starts, nb)``, the inverses
+    of ``J``'s node blocks (rows of 2 or 3 entries, (m, 3)), the first row of each block
+    ((n + 1,), ``starts[nb] = m``) and the number of blocks."""
+    m = J.shape[0]
     Pinv = np.zeros((m, 3))
     starts = np.empty(n + 1, np.int64)
     nb = 0
@@ -37,21 +30,45 @@ def _linear_solve(J, h, states, n, dense_max, x0, eta):
             nb += 1
     starts[nb] = pos
     for b in range(nb):
-        a0 = starts[b]
-        if starts[b + 1] - a0 == 2:
-            p, q, r, s = J[a0, a0], J[a0, a0 + 1], J[a0 + 1, a0], J[a0 + 1, a0 + 1]
-            det = p * s - q * r
-            Pinv[a0, 0], Pinv[a0, 1] = s / det, -q / det
-            Pinv[a0 + 1, 0], Pinv[a0 + 1, 1] = -r / det, p / det
-        else:
-            blk = np.linalg.inv(J[a0:a0 + 3, a0:a0 + 3].copy())
-            for a in range(3):
-                for c in range(3):
-                    Pinv[a0 + a, c] = blk[a, c]
-    hn = np.sqrt(np.sum(h * h))
+        _block_inverse(J, Pinv, starts, b)
+    return Pinv, starts, nb
+
+
+@njit(cache=True)
+def _block_inverse(J, Pinv, starts, b):
+    """Block ``b`` of the preconditioner from ``J``: 2 x 2 in closed form, 3 x 3 by LAPACK."""
+    a0 = starts[b]
+    if starts[b + 1] - a0 == 2:
+        p, q, r, s = J[a0, a0], J[a0, a0 + 1], J[a0 + 1, a0], J[a0 + 1, a0 + 1]
+        det = p * s - q * r
+        Pinv[a0, 0], Pinv[a0, 1] = s / det, -q / det
+        Pinv[a0 + 1, 0], Pinv[a0 + 1, 1] = -r / det, p / det
+    else:
+        blk = np.linalg.inv(J[a0:a0 + 3, a0:a0 + 3].copy())
+        for a in range(3):
+            for c in range(3):
+                Pinv[a0 + a, c] = blk[a, c]
+
+
+@njit(cache=True)
+def _krylov(J, h, r0, x0, eta, hn, Pinv, starts, nb, exact):
+    """Restarted GMRES for ``J x = h`` preconditioned by ``Pinv`` (:func:`_preconditioner`),
+    started from ``x0`` whose residual ``r0 = h - J x0`` the caller gives (it may know it
+    without a product with ``J``), to ``|h - J x| <= max(1e-14 hn, eta |r0|)`` (``hn = |h|``;
+    ``eta``: the forcing term of the inexact Newton method, ``0`` for an exact solve; the
+    Arnoldi estimate of the residual, with a factor 2 of margin, ends the solve), with LU when it
+    does not get there in 120 iterations (a ``O(m^2)``-per-iteration path for the large,
+    well-conditioned systems where the LU's ``O(m^3)`` dominates the step).
+
+    ``exact=False``: ``J`` only approximates the matrix whose residual ``r0`` is (the rows of
+    nodes whose directions moved by less than the forcing term kept from an earlier iteration,
+    :func:`.cone_reduced._newton_point`); the solve then ends after the first restart cycle
+    (no residual is recomputed with ``J``, no LU) and reports ``ok = False`` if the estimate
+    did not reach the target.  Returns ``(x, ok)``."""
+    m = r0.size
     x = x0.copy()
     if hn == 0.0:
-        return np.zeros(m)
+        return np.zeros(m), True
     restart = 40
     V = np.empty((restart + 1, m))
     H = np.zeros((restart + 1, restart))
@@ -60,16 +77,19 @@ def _linear_solve(J, h, states, n, dense_max, x0, eta):
     g = np.empty(restart + 1)
     z = np.empty(m)
     w = np.empty(m)
-    rres = np.empty(m)
+    rres = r0.copy()
     target = -1.0
     total = 0
     while total < 120:
-        _residual(J, h, x, rres)
+        if total > 0:
+            if not exact:
+                return x, False
+            _residual(J, h, x, rres)
         beta = np.sqrt(np.sum(rres * rres))
         if target < 0.0:
             target = max(1e-14 * hn, eta * beta)
         if beta <= target:
-            return x
+            return x, True
         for a in range(m):
             V[0, a] = rres[a] / beta
         g[:] = 0.0
@@ -122,11 +142,13 @@ def _linear_solve(J, h, states, n, dense_max, x0, eta):
         for a in range(m):
             x[a] += z[a]
         if converged:  # the Arnoldi estimate, with a factor 2 of margin (the Newton method
-            return x   # checks its own residual after the step)
+            return x, True  # checks its own residual after the step)
+    if not exact:
+        return x, False
     _residual(J, h, x, rres)
     if np.sqrt(np.sum(rres * rres)) <= 10.0 * target:
-        return x
-    return np.linalg.solve(J, h)
+        return x, True
+    return np.linalg.solve(J, h), True
 
 
 @njit(cache=True)
@@ -155,4 +177,4 @@ def _precondition(Pinv, starts, nb, v, out):
             out[a0 + a] = acc
 
 
-__all__ = ["DENSE_MAX", "_linear_solve"]
+__all__ = ["DENSE_MAX", "_krylov", "_preconditioner", "_block_inverse"]

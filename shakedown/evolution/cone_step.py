@@ -175,7 +175,7 @@ class ConeStepSolver:
         Newton iterations per attempt.
     dense_max : int
         Largest reduced Newton system solved by LU directly; larger ones are solved by
-        block-Jacobi preconditioned GMRES first (:func:`.cone_kernel._linear_solve`).
+        block-Jacobi preconditioned GMRES first (:func:`.cone_linear._krylov`).
     """
 
     def __init__(self, system, feas_tol: float = FEAS_TOL, max_iter: int = 60,
@@ -195,10 +195,8 @@ class ConeStepSolver:
             self.well_posed = bool(crit.well_posed)
         except NotImplementedError:  # before the 3-D bound is wired into the system
             self.well_posed = not self.data.coupled
-        # rows of K for the last piece's unknowns, reused by the next iteration or step with
-        # the same slip and separated nodes (cone_kernel.newton_cached)
-        self._cache = ck.new_cache(self.n)
-        self._gathered = np.full(self.n, -1, np.int8)
+        # the Newton method's buffers (unknowns, reduced matrix), reused by every step
+        self._buffers = ck.new_buffers(self.n)
         self.totals = dict(steps=0, iterations=0, cold_restarts=0, gauss_seidel=0, failed=0)
 
     # ------------------------------------------------------------------ base reactions
@@ -220,42 +218,40 @@ class ConeStepSolver:
         Returns ``(u, r, states, method, iterations, residuals, scale)``; ``u, r`` (N, 3)."""
         n = self.n
         d = self.data
-        F = float(np.abs(rb).max(initial=0.0))
-        F = F if F > 0 else 1.0
-        rbf = np.ascontiguousarray(rb, float).ravel()
-        tol = 1e-3 * self.feas_tol * F
-        slack = STICK_SLACK * self.feas_tol * F
-        r = np.empty(3 * n)
-        st = np.empty(n, np.int8)
+        rbf = np.ascontiguousarray(rb, dtype=float).reshape(-1)
         tries = [("newton", u0), ("newton_cold", None)] if u0 is not None else [
             ("newton_cold", None)]
         best = None
         iters = 0
+        F = 1.0
         for name, guess in tries:
-            u = np.zeros(3 * n) if guess is None else np.array(guess, float).ravel()
+            u = np.zeros(3 * n) if guess is None else np.array(guess, dtype=float).reshape(-1)
             given = guess is not None and ku0 is not None
-            if given:
-                r[:] = rbf + np.asarray(ku0, float).ravel()
-            code, it, _ = ck.newton_cached(d.Kn, rbf, d.sx, d.sy, d.g, self.rhoT, self.rhoN, u,
-                                           r, st, tol, self.max_iter, self.dense_max, slack, F,
-                                           given, self._cache, self._gathered)
+            r = rbf + np.asarray(ku0, dtype=float).reshape(-1) if given else np.empty(3 * n)
+            st = np.empty(n, np.int8)
+            code, it, F, *checks = ck.attempt(
+                d.Kn, rbf, d.sx, d.sy, d.g, self.rhoT, self.rhoN, d.kT, d.kN, u, r, st,
+                self.feas_tol, self.max_iter, self.dense_max, STICK_SLACK, given, self._buffers,
+                bool(equilibrium))
             iters += it
-            res = self._verify(rbf, u, r, F, equilibrium)
+            res = ConeResiduals(*checks)
             if best is None or res.worst < best[3].worst:
-                best = (u.copy(), r.copy(), st.copy(), res, name)
+                best = (u, r, st, res, name)
             if res.worst <= self.feas_tol:
                 break
             if name == "newton":
                 self.totals["cold_restarts"] += 1
         if best[3].worst > self.feas_tol:  # fallback: projected block Gauss-Seidel
             self.totals["gauss_seidel"] += 1
-            u = best[0].copy()
+            u, r, st = best[0].copy(), np.empty(3 * n), np.empty(n, np.int8)
+            tol = 1e-3 * self.feas_tol * F
+            slack = STICK_SLACK * self.feas_tol * F
             code, it, _ = ck.gauss_seidel(d.Kn, rbf, d.sx, d.sy, d.g, self.rhoT, self.rhoN, u,
                                           r, st, tol, 2000, 50, slack)
             iters += it
             res = self._verify(rbf, u, r, F, equilibrium)
             if res.worst < best[3].worst:
-                best = (u.copy(), r.copy(), st.copy(), res, "gauss_seidel")
+                best = (u, r, st, res, "gauss_seidel")
         u, r, st, res, name = best
         self.totals["steps"] += 1
         self.totals["iterations"] += iters

@@ -282,11 +282,12 @@ def test_warm_start_with_its_reactions_given_and_a_wrong_product_caught_by_the_v
     np.testing.assert_allclose(wrong[1][:, :2], ref.q, rtol=0, atol=1e-10 * F)
 
 
-def test_rows_of_k_reused_across_steps_only_for_the_same_slip_and_separated_nodes():
-    """One solver (its rows of ``K`` gathered for the last piece are reused by the next step when
-    the slip and separated nodes are the same, ``cone_kernel.newton_cached``) through steps whose
-    pieces differ and repeat gives, step by step, the answers, methods and iteration counts of a
-    fresh solver per step: a stale gather is never used."""
+def test_buffers_shared_across_steps_give_the_answers_of_fresh_solvers():
+    """One solver (its buffers for the unknowns and the reduced matrices are reused by every
+    step, and a matrix kept from one Newton iteration is reused by the next,
+    ``cone_reduced._newton_point``) through steps whose pieces differ and repeat gives, step by
+    step, the answers, methods and iteration counts of a fresh solver per step: nothing stale
+    is used across steps."""
     s, v, q_w, p_w = random_3d(12, 3, separation=True)
     shared = ConeStepSolver(s, dense_max=4)
     loads = [(q_w, p_w), (0.2 * q_w, np.abs(p_w) + 0.5), (3.0 * q_w, np.abs(p_w) + 0.5),
@@ -303,11 +304,10 @@ def test_rows_of_k_reused_across_steps_only_for_the_same_slip_and_separated_node
     assert len(set(pieces)) >= 3  # the pieces changed between steps (and repeated)
 
 
-def test_a_step_assembled_directly_keeps_the_cached_rows_of_k_valid():
-    """A step started near its answer (one Newton iteration expected: the matrix is assembled
-    from ``K`` directly, the cached gather of another piece is kept) between two cold solves of
-    the same step (the second reuses that gather): every answer, method and iteration count as
-    with a fresh solver."""
+def test_a_warm_step_between_cold_ones_leaves_nothing_stale():
+    """A step started near its answer (one Newton iteration, a small LU or GMRES matrix in the
+    shared buffer) between two cold solves of another step: every answer, method and iteration
+    count as with a fresh solver."""
     s, v, q_w, p_w = random_3d(12, 4, separation=True)
     load_b = (3.0 * q_w, np.abs(p_w) + 0.5)
     ref_b = ConeStepSolver(s, dense_max=4).solve(v, *load_b)
