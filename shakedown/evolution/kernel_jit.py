@@ -16,7 +16,8 @@ beside the sources, or the user-wide cache), but the stamp of every kernel funct
 digest of the contents of *all* the kernel files, so any change to any of them recompiles
 every kernel function once (and overwrites its entry); an unchanged tree loads from the cache
 as before.  The locator list is numba's private API (``numba.core.caching``, names checked for
-numba 0.59 to 0.68): if it is missing, numba's own per-file stamps are kept (the behaviour
+numba 0.59 to 0.68; ``NUMBA_CACHE_LOCATOR_CLASSES``, which replaces numba's list, also
+bypasses this one): if it is missing, numba's own per-file stamps are kept (the behaviour
 before this guard) and :data:`STAMPED` is False.
 """
 

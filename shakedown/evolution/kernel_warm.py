@@ -4,8 +4,11 @@ line's first run) compiled in the background while the steps run in Python (issu
 Compiling the kernel (:mod:`.kernel`: the period loop ``march`` and everything it calls) costs
 about 70 s of CPU once after installing (``benchmarks/RESULTS_first_run.md``); numba then keeps
 it on disk (``cache=True``: beside the package in ``shakedown/evolution/__pycache__``, or in
-``NUMBA_CACHE_DIR``) and later processes load it in about 0.5 s.  The policy for a process whose
-cache is cold is read from the environment variable ``SHAKEDOWN_KERNEL`` each time it is asked:
+``NUMBA_CACHE_DIR``) and later processes load it in about 0.5 s.  Its entries are stamped by
+the contents of all the kernel's source files (:data:`.kernel_jit.KERNEL_SOURCES`): after an
+edit of any of them, :func:`cached` answers False and the whole kernel is compiled again once.
+The policy for a process whose cache is cold is read from the environment variable
+``SHAKEDOWN_KERNEL`` each time it is asked:
 
 - unset or ``compile``: compile at the first use (the library's default; a study's workers
   load what the parent compiled, :func:`warm_up`);
