@@ -49,10 +49,12 @@ def g(x):
     return x + {}.0
 """
 
-#: Three imports of the caller per cache location: the first compiles, the second (no source
-#: changed) must load from the cache, the third follows an edit of the callee's file alone,
-#: the fourth (no further change) loads the recompiled code.  Printed: per location and mode,
-#: the list of (value, cache hits, cache misses) of f.
+#: Four fresh imports of the caller per cache location (``NUMBA_CACHE_DIR``, ``__pycache__``)
+#: and per mode (``stamp``: :func:`kernel_jit.install_stamp` of the two files; ``numba``:
+#: numba's own locators): the first compiles, the second (no source changed) must load from
+#: the cache, the third follows an edit of the callee's file alone, the fourth (no further
+#: change) loads what the third stored.  Printed: per location and mode, the list of (value of
+#: ``f(1.0)``, cache hits, cache misses, locator class) of ``f``.
 SCRIPT = r"""
 import importlib, json, os, sys
 import numba.core.caching as caching
