@@ -34,6 +34,29 @@ PEERS_SKIP = ("external peer cross-check (Siconos / GetFEM under /usr/bin/python
               "`python3 -m pytest -m peers`; last run in benchmarks/RESULTS_peers.md")
 
 
+@pytest.fixture(scope="session", autouse=True)
+def _kernels_compiled_in_the_background():
+    """Start ``tests/warm_kernels.py`` at the start of the session (see there: on a cold numba
+    cache it compiles the kernels on the second core while the first tests need none); stopped
+    at the end of the session if still running.  ``SHAKEDOWN_KERNEL=numpy`` skips it."""
+    import subprocess
+    import sys
+
+    if os.environ.get("SHAKEDOWN_KERNEL", "").lower() in ("numpy", "python", "off", "0"):
+        yield
+        return
+    here = Path(__file__).resolve().parent
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        p for p in (str(here.parent), os.environ.get("PYTHONPATH", "")) if p)}
+    proc = subprocess.Popen([sys.executable, str(here / "warm_kernels.py")], env=env,
+                            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)
+    yield
+    if proc.poll() is None:
+        proc.kill()
+    proc.wait()
+
+
 def pytest_collection_modifyitems(config, items):
     """Skip ``peers`` tests, with a visible reason, unless the run selects them (``-m peers``)."""
     import pytest
