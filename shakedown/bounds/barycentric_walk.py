@@ -45,10 +45,11 @@ from .facet_walk import FacetWalk, batch_check
 #: walk stops, ``broken``, and the pruning goes on in ``v`` from the same vertex).  No limit by
 #: default: a pivot costs ``O(N m + m^2)``, at most that of the walk in ``v``.
 MAX_TIGHT = 1 << 30
-#: Pivots between two recomputations of the working basis's inverse from scratch.
-REFACTOR = 50
 #: Vertices checked together (one product ``G X``).
 CHECK_BATCH = 16
+#: What :meth:`BarycentricWalk.walk_to` returns when the target is tight at a vertex that is
+#: not checked yet (it is checked with the next batch, :meth:`BarycentricWalk.flush`).
+UNCHECKED = "unchecked"
 #: Relative tolerance of the reduced costs and of the ratio test's pivot elements.
 PIV_TOL = 1e-11
 
@@ -113,9 +114,9 @@ class BarycentricWalk:
 
     The working basis ``M`` (rows: ``y_P`` and ``K_{T,P}``; columns: the basic coordinates
     ``P``) is kept as an explicit inverse, updated in ``O(m^2)`` per pivot (a column or a row
-    replaced, or both added, or both removed) and recomputed from scratch every
-    :data:`REFACTOR` pivots; the columns ``K_{J,P}`` and rows ``K_{T,J}`` the pivots multiply
-    with are kept contiguous.
+    replaced, or both added, or both removed) and recomputed from scratch when
+    :func:`.inverse_updates.refactor_due` says; the columns ``K_{J,P}`` and rows ``K_{T,J}``
+    the pivots multiply with are kept contiguous.
 
     Parameters
     ----------
@@ -131,6 +132,7 @@ class BarycentricWalk:
         self.G, self.b = frame.G, frame.c + self.t * frame.m
         self.R, self.n = frame.G.shape
         self.covered = np.zeros(self.R, bool)
+        self.unchecked = np.zeros(self.R, bool)  # tight at a vertex not yet checked
         self.limit = min(MAX_TIGHT, self.n)
         self.pivots = 0
         self.broken = False
@@ -211,9 +213,12 @@ class BarycentricWalk:
     def _flush(self) -> bool:
         """Check the buffered vertices in ``v`` (one product with ``E^T`` maps them, ``v = x* -
         E sigma``, one product ``G X`` checks them); their tight rows join ``covered``.
-        ``False`` if the last one fails (the walk then stops as broken; an earlier one that
-        fails only adds nothing)."""
+        If the last one fails, the working basis is recomputed from scratch (the updates
+        drift: issue 26, m ~ 800, a vertex off by more than the check's tolerance after ~110
+        updates) and the current vertex checked once more; ``False`` if that fails too (the
+        walk then stops as broken; an earlier vertex that fails only adds nothing)."""
         S, self._buffer = self._buffer, []
+        self.unchecked[:] = False
         if not S:
             return True
         V = self.f.x2 - np.vstack(S) @ self.f.ET  # (batch, N): one GEMM, no gather of E_P
@@ -221,13 +226,22 @@ class BarycentricWalk:
         for tight in tights:
             if tight is not None:
                 self.covered |= tight
-        return tights[-1] is not None
+        if tights[-1] is not None:
+            return True
+        if self.since == 0 or not self._refactor():
+            return False
+        _, (tight,) = batch_check(self.G, self.b, [self.f.x2 - self._vertex() @ self.f.ET])
+        if tight is None:
+            return False
+        self.covered |= tight
+        return True
 
     # ------------------------------------------------------------------ walking
     def walk_to(self, k: int, cap: int):
         """Walk towards row ``k`` (``max G_k v``): ``True`` (``k`` tight at a checked vertex),
-        ``False`` (optimum with ``k`` slack: face empty), ``None`` (undecided: ``cap`` pivots,
-        a failed check, or too many tight rows)."""
+        :data:`UNCHECKED` (tight at the current vertex, checked with the next batch: the caller
+        reads :attr:`covered` after :meth:`flush`), ``False`` (optimum with ``k`` slack: face
+        empty), ``None`` (undecided: ``cap`` pivots, a failed check, or too many tight rows)."""
         if self.broken:
             return None
         if self.covered[k]:
@@ -247,14 +261,23 @@ class BarycentricWalk:
                 break
             if kl in self.Tl:
                 break
-        if not self._flush():
-            self.broken = True
+        if res is None and not self.broken and kl in self.Tl and 0 < len(self._buffer) < CHECK_BATCH:
+            return UNCHECKED  # k tight at the current vertex: checked with the next batch
+        if not self.flush():
             return None
         if self.covered[k]:
             return True
         if res is False and self.sJ[kl] > 1e-9 * (1.0 + abs(self.b[k])):
             return False
         return None
+
+    def flush(self) -> bool:
+        """Check the vertices not yet checked (:attr:`unchecked`: their tight rows); ``False``
+        (and the walk ``broken``) if the current one fails."""
+        if self._flush():
+            return True
+        self.broken = True
+        return False
 
     def _pivot(self, g, kl):
         """One primal simplex pivot for ``max g . sigma``: ``"optimal"``, ``"moved"`` or
@@ -310,11 +333,12 @@ class BarycentricWalk:
         self._update(kind, q, e, j, dP, dS, float(tmin))
         self.pivots += 1
         self.since += 1
-        if self.since >= REFACTOR and not self._refactor():
+        if iu.refactor_due(self.since, len(self.P)) and not self._refactor():
             return None
         if e >= 0 or kind == "row":
             if not self.covered[self.f.J[self.Tl]].all():
                 self._buffer.append(self._vertex())
+                self.unchecked[self.f.J[self.Tl]] = True
                 if len(self._buffer) >= CHECK_BATCH and not self._flush():
                     return None
         return "moved"

@@ -32,8 +32,6 @@ import scipy.linalg as sla
 from . import inverse_updates as iu
 from .certificates import CERT_TOL, DenseAnswer, kkt_residuals
 
-#: Pivots between two recomputations of the working basis's inverse from scratch.
-REFACTOR = 50
 #: Primal feasibility tolerance (relative to the largest ``s*``) and pivot tolerance.
 FEAS_TOL = 1e-10
 PIV_TOL = 1e-9
@@ -113,11 +111,11 @@ class BasisLP:
         cap = max_pivots if max_pivots is not None else 4 * self.n + 100
         P, T = [], []
         W = np.zeros((0, 0))
-        it = 0
+        it = since = 0
         while True:
             m = len(P)
-            if it and it % REFACTOR == 0:
-                W = self._inverse(P, T)
+            if iu.refactor_due(since, m):
+                W, since = self._inverse(P, T), 0
                 if W is None:
                     return self._failed(it)
             sP = W @ self.star[T] if m else np.zeros(0)
@@ -178,6 +176,7 @@ class BasisLP:
             if W is None:
                 return self._failed(it)
             it += 1
+            since += 1
 
     def _update(self, W, P, T, kind, q, enter, rowq):
         K, mJ, y = self.K, self.mJ, self.f.y

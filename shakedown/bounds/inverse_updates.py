@@ -14,6 +14,19 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as sla
 
+#: Pivots between two recomputations of the working basis's inverse from scratch: at least
+#: ``REFACTOR``, and ``m // REFACTOR_DIV`` for an ``m``-square basis: a recomputation costs
+#: ``O(m^3)``, a pivot ``O(N m)`` (issue 26, N = 2000 crack networks: m ~ 600-940, a
+#: recomputation ~85 ms against ~5 ms per pivot; every 50 pivots it was a fifth of the walks).
+REFACTOR = 50
+REFACTOR_DIV = 4
+
+
+def refactor_due(since: int, m: int) -> bool:
+    """Whether an ``m``-square explicit inverse updated ``since`` times is due for a
+    recomputation from scratch (:data:`REFACTOR`, :data:`REFACTOR_DIV`)."""
+    return since >= max(REFACTOR, m // REFACTOR_DIV)
+
 
 def rank1(W, alpha, x, y):
     """``W + alpha x y^T`` in place (BLAS ``dger`` on the transposed view of C-order ``W``)."""

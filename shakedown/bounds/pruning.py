@@ -49,7 +49,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import dense_lp
-from .barycentric_walk import BarycentricWalk, SimplexFrame
+from .barycentric_walk import UNCHECKED, BarycentricWalk, SimplexFrame
 from .basis_lp import BasisLP
 from .facet_walk import FacetWalk, certified_rows, vertex_rows
 from .outcome import value
@@ -135,15 +135,18 @@ class _Pruner:
             self.best = (val, k if k is not None else int(T[0]), ans)
         return True
 
-    def basis_lps(self, rows):
+    def basis_lps(self, rows, stop=None):
         """Exact "max lam" LPs in the coordinates of the lam2 basis (:mod:`.basis_lp`); returns
-        the rows it could not decide (no frame, or an answer not certified)."""
+        the rows it could not decide (no frame, or an answer not certified) or did not start
+        (``stop()`` true after an answer)."""
         if not self.simplex():
             return [int(k) for k in rows]
         self.lp = self.lp or BasisLP(self.frame, self.tab)
         left = []
-        for k in rows:
+        for i, k in enumerate(rows):
             k = int(k)
+            if stop is not None and stop():
+                return left + [int(j) for j in rows[i:]]
             if self.exact[k]:
                 continue
             ans = self.lp.solve(k)
@@ -241,10 +244,29 @@ class _Pruner:
         walk = BarycentricWalk(self.frame, t, T)
         return walk if walk.ok else None
 
+    def settle(self, walk, t):
+        """Check the vertices of ``walk`` not yet checked (a :class:`.BarycentricWalk`'s
+        batch) and credit the rows tight at its checked vertices (``lam_high >= t``)."""
+        if walk is None:
+            return
+        if getattr(walk, "unchecked", None) is not None and walk.unchecked.any():
+            walk.flush()
+        self.lower[walk.covered] = np.maximum(self.lower[walk.covered], t)
+
+    def to_v(self, walk, t):
+        """The walk in ``v`` at the vertex of ``walk`` (:meth:`.BarycentricWalk.facet_walk`),
+        after crediting what ``walk`` found."""
+        self.settle(walk, t)
+        return walk.facet_walk()
+
     def capped_lps(self, walk, t, rows):
         """``max lam`` with row ``k`` tight: exactly in the coordinates of the lam2 basis where
-        it applies, else with ``lam <= t`` from the walk's vertex."""
-        rows = self.basis_lps(rows)
+        it applies, else with ``lam <= t`` from the walk's vertex.  A value below ``t`` ends
+        the batch: the rows left are decided again at the new, lower incumbent (most by walks
+        there), not by long LPs at ``t``."""
+        rows = self.basis_lps(rows, stop=lambda: self.best[0] < t)
+        if self.best[0] < t:
+            return rows
         if not rows:
             return []
         A = np.vstack([self.A, np.r_[np.zeros(self.n), 1.0][None, :]])
@@ -294,21 +316,29 @@ class _Pruner:
                 self.lower[walk.covered] = np.maximum(self.lower[walk.covered], t)
                 todo = ~self.exact & (self.lower < t)
                 todo[pending] = False
+                unchecked = getattr(walk, "unchecked", None)  # (a BarycentricWalk's)
+                if unchecked is not None:
+                    todo &= ~unchecked  # reached, checked with the next batch
                 left = np.flatnonzero(todo)
+                if not left.size and unchecked is not None and unchecked.any():
+                    walk.flush()  # the rows of a vertex that fails come back to todo
+                    continue
                 if left.size and len(pending) < BATCH:
                     first = [j for j in priority if todo[j]]
                     k = first[0] if first else int(left[np.argmin(walk.s[left])])
                     res = walk.walk_to(k, WALK_CAP)
                     if res is None and walk.broken and isinstance(walk, BarycentricWalk):
-                        walk = walk.facet_walk()  # too many tight rows: go on in v
+                        walk = self.to_v(walk, t)  # too many tight rows: go on in v
                         if walk is None:
                             pending.append(k)
                             break
                         res = walk.walk_to(k, WALK_CAP)
                     if res is None and not walk.broken:  # undecided: go on to a decision
                         res = walk.walk_to(k, LONG_WALK_CAP)
+                    if res is UNCHECKED:
+                        continue
                     if res is False and isinstance(walk, BarycentricWalk):
-                        walk = walk.facet_walk()  # the descent walks in v
+                        walk = self.to_v(walk, t)  # the descent walks in v
                         if walk is None:
                             pending.append(k)
                             break
@@ -328,6 +358,7 @@ class _Pruner:
                         pending.append(k)
                     continue
                 break
+            self.settle(walk, t)
             if not pending:
                 if walk is not None:
                     return

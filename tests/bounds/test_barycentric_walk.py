@@ -16,8 +16,9 @@ from test_bounds import random_problem
 from test_pruning import _unscreened_network, assert_fast_matches_full
 
 import shakedown as sd
+from shakedown.bounds import inverse_updates as iu
 from shakedown.bounds import pruning
-from shakedown.bounds.barycentric_walk import BarycentricWalk, SimplexFrame
+from shakedown.bounds.barycentric_walk import UNCHECKED, BarycentricWalk, SimplexFrame
 
 
 def _problem(n, seed):
@@ -101,6 +102,10 @@ def test_walk_decisions_match_independent_lps(n, seed, frac):
     empty = 0
     for k in f.J:
         res = w.walk_to(int(k), 500)
+        if res is UNCHECKED:  # tight at the current vertex, checked with the next batch
+            assert w.unchecked[k] and not w.covered[k]
+            assert w.flush()
+            res = bool(w.covered[k])
         assert not w.broken
         truth = _face_nonempty(G, b, k)
         assert res is truth  # every row decided (short walks at this size), and rightly
@@ -143,7 +148,32 @@ def test_wrong_barycentric_data_is_never_certified():
         bad.K[kl] = -bad.K[kl]  # the walk now sees a wrong row k
         bad.KF = np.asfortranarray(bad.K)
         assert w.walk_to(k, 500) is not True
+        w.flush()  # a vertex reached but not yet checked is checked now (issue 26)
         assert not w.covered[k]
+
+
+def test_a_target_reached_counts_only_once_its_vertex_is_checked():
+    """Issue 26: a walk that reaches its target returns :data:`UNCHECKED` and checks the vertex
+    with the next batch.  A row scaled wrongly in the frame (the walk believes it tight where it
+    is slack) is reached, but the check in ``v`` never covers it; the right rows are covered."""
+    n, seed = 30, 2
+    G, c, m, B, x2, lam2 = _problem(n, seed)
+    t = 0.99 * lam2
+    b = c + t * m
+    T = _vertex(G, b, seed)
+    empty = [int(k) for k in SimplexFrame.of(G, c, m, B, x2, lam2).J
+             if not _face_nonempty(G, b, k)]
+    assert len(empty) >= 3
+    for k in empty[:3]:
+        bad = SimplexFrame.of(G, c, m, B, x2, lam2)
+        w = BarycentricWalk(bad, t, T)
+        bad.K[bad.loc[k]] *= 10.0  # the walk's row k: tight 10x too early
+        bad.KF = np.asfortranarray(bad.K)
+        assert w.walk_to(k, 500) is UNCHECKED and w.unchecked[k]
+        assert w.flush() and not w.unchecked.any()
+        assert not w.covered[k]
+        for j in np.flatnonzero(w.covered):
+            assert _face_nonempty(G, b, j)
 
 
 def test_pruning_hands_over_to_the_walk_in_v(monkeypatch):
@@ -188,3 +218,61 @@ def test_pruning_uses_the_barycentric_walk_and_agrees(monkeypatch):
     slow = sd.shakedown_bounds(model.system, load)
     assert fast.lam1 == pytest.approx(slow.lam1, rel=1e-12)
     assert fast.limiting_constraint == slow.limiting_constraint
+
+
+def test_working_inverse_recomputed_when_due(monkeypatch):
+    """The explicit inverse of the working basis is recomputed from scratch when
+    :func:`refactor_due` says (every ``REFACTOR`` pivots on small bases, ``m / REFACTOR_DIV``
+    on large ones), and the one updated in between agrees with it."""
+    assert not iu.refactor_due(49, 10) and iu.refactor_due(50, 10)
+    assert not iu.refactor_due(199, 800) and iu.refactor_due(200, 800)
+    monkeypatch.setattr(iu, "REFACTOR", 3)
+    G, c, m, B, x2, lam2 = _problem(30, 1)
+    f = SimplexFrame.of(G, c, m, B, x2, lam2)
+    t = 0.9 * lam2
+    seen = []
+    orig = BarycentricWalk._refactor
+
+    def refactor(self):
+        if hasattr(self, "W"):  # the updated inverse against the fresh one
+            due, old = (self.since, len(self.P)), self.W.copy()
+            ok = orig(self)
+            seen.append((due, float(np.abs(old - self.W).max() / np.abs(self.W).max())))
+            return ok
+        return orig(self)
+
+    monkeypatch.setattr(BarycentricWalk, "_refactor", refactor)
+    w = BarycentricWalk(f, t, _vertex(G, c + t * m, 1))
+    assert w.ok
+    for k in f.J:
+        w.walk_to(int(k), 500)
+    assert w.pivots >= 6 and len(seen) >= w.pivots // 8
+    assert all(since == max(3, size // iu.REFACTOR_DIV) for (since, size), _ in seen)
+    assert max(d for _, d in seen) <= 1e-9
+
+
+def test_a_drifted_vertex_is_recomputed_before_the_walk_gives_up():
+    """Issue 26: with the working inverse recomputed rarely (``m / 4`` updates at large ``m``)
+    the updated vertex can drift off by more than the check's tolerance; the walk then
+    recomputes its basis from scratch and checks the current vertex once more before it calls
+    itself broken.  A vertex that is wrong for its basis is refused, not covered."""
+    G, c, m, B, x2, lam2 = _problem(30, 1)
+    f = SimplexFrame.of(G, c, m, B, x2, lam2)
+    t = 0.9 * lam2
+    b = c + t * m
+    w = BarycentricWalk(f, t, _vertex(G, b, 1))
+    assert w.ok
+    for k in f.J[:10]:
+        w.walk_to(int(k), 500)
+    w.flush()
+    assert not w.broken and w.pivots >= 3 and w.since > 0
+    exact = w.sP.copy()
+    w.sP = w.sP * (1.0 + 1e-3)  # the drift of many updates, exaggerated
+    w._buffer.append(w._vertex())
+    assert w.flush() and not w.broken and w.since == 0
+    np.testing.assert_allclose(w.sP, exact, rtol=1e-9, atol=1e-12)
+    # a basis whose vertex is infeasible cannot be rescued: broken
+    w.since = 1
+    w.rJ = w.rJ - 1.0  # every row outside the lam2 basis moved in: the vertex violates them
+    w._buffer.append(w._vertex() * 1.5)
+    assert not w.flush() and w.broken

@@ -297,14 +297,17 @@ def test_walk_maximise_matches_linprog(seed, n, dup):
     assert long_walks
 
 
-@pytest.mark.parametrize("n,seed", [(120, 2), pytest.param(200, 3, marks=pytest.mark.slow)])
-def test_capped_batches_stopped_by_a_lower_incumbent(n, seed, monkeypatch):
+@pytest.mark.parametrize("n,seed,coords", [(120, 2, "v"), (120, 2, "lam2 basis"),
+                                           pytest.param(200, 3, "v", marks=pytest.mark.slow)])
+def test_capped_batches_stopped_by_a_lower_incumbent(n, seed, coords, monkeypatch):
     """Short walks (most rows go to capped LPs) from an unscreened start: a capped LP that
     lowers the incumbent ends its batch, and the rows still running are decided again at the
     new incumbent (not by exact LPs at the old one).  lam1 and every exact lam_high stay those
-    of the full computation.  (The LPs in ``v``: without the coordinates of the lam2 basis, as
-    where they do not apply.)"""
-    monkeypatch.setattr(pruning._Pruner, "simplex", lambda self: None)
+    of the full computation.  ``coords="v"``: the LPs in ``v``, without the coordinates of the
+    lam2 basis, as where they do not apply; ``"lam2 basis"``: the exact LPs in them, one by one
+    (issue 26: they too stop at the first value below the incumbent)."""
+    if coords == "v":
+        monkeypatch.setattr(pruning._Pruner, "simplex", lambda self: None)
     monkeypatch.setattr(pruning, "INIT_LPS", 1)
     monkeypatch.setattr(pruning, "UNSCREENED_LPS", 1)
     monkeypatch.setattr(pruning, "SCREEN_ROWS", 0)
