@@ -169,3 +169,24 @@ def test_command_on_a_cold_cache_says_what_it_did(tmp_path, quiet):
     assert said is not quiet
     if not quiet:
         assert "(pid 12345)" in r.stderr and "ran in Python" in r.stderr
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/self/autogroup"), reason="Linux autogroups only")
+@pytest.mark.parametrize("own_session", [True, False])
+def test_background_compile_lowers_its_own_autogroup_only(own_session):
+    """A detached compile (a session of its own, hence an autogroup of its own) lowers its
+    group's priority, so that it does not take half of the CPU from the command's workers; a
+    process sharing a session (e.g. with a terminal) never changes that session's group."""
+    code = ("from shakedown.evolution.kernel_warm import _lower_autogroup; "
+            "print(_lower_autogroup()); print(open('/proc/self/autogroup').read().strip())")
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    before = open("/proc/self/autogroup").read().strip()
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=root,
+                       start_new_session=own_session)
+    assert r.returncode == 0, r.stderr[-2000:]
+    done, group = r.stdout.split("\n")[:2]
+    if own_session:
+        assert done == "True" and group.endswith("nice 19")
+    else:
+        assert done == "False" and group == before
+    assert open("/proc/self/autogroup").read().strip() == before
