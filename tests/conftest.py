@@ -42,7 +42,9 @@ def _kernels_compiled_in_the_background():
     import subprocess
     import sys
 
-    if os.environ.get("SHAKEDOWN_KERNEL", "").lower() in ("numpy", "python", "off", "0"):
+    from shakedown.evolution.kernel_warm import policy
+
+    if policy() == "off":
         yield
         return
     here = Path(__file__).resolve().parent
