@@ -50,7 +50,7 @@ def _primal_finish(A, b, e, tab, cap=None):
     return out if not out.singular and out.dual_feasible else None
 
 
-def solve_max(A, b, e, *, max_iter=80, interior=False, why=None, accept=None):
+def solve_max(A, b, e, *, max_iter=80, interior=False, why=None, accept=None, stop=None):
     """``max e.x s.t. A x <= b``: interior point, basis identification, dual simplex clean-up.
 
     Returns ``(answer, tableau)`` with the tableau of the optimal basis (for warm starts), or
@@ -67,12 +67,19 @@ def solve_max(A, b, e, *, max_iter=80, interior=False, why=None, accept=None):
     Chebyshev centre (:func:`~.engine._interior_centre`) needs no vertex, and on a 2000-crack
     network (issue 26, ``rng=77``) its crossover completed a basis of 2 strongly active rows by
     a dense 1999 x 3999 ``linprog`` (:func:`~.ipm.complete_basis`) that ran for minutes.
+    ``stop``: a callable given the same kind of answer at each iterate of the interior point
+    (from merit :data:`~.ipm.APPROX_TOL` on); ``True`` ends the interior point there
+    (:func:`~.ipm.ipm`), and ``accept`` then decides.
     """
     R, n = A.shape
     rn = np.linalg.norm(A, axis=1)
     rn[rn == 0] = 1.0
     As, bs = A / rn[:, None], b / rn
-    x, s, z, status, it = ipm(As, bs, e, max_iter=max_iter)
+    early = None
+    if stop is not None:
+        def early(x, s, z):
+            return stop(DenseAnswer("interior", x, z / rn, np.zeros(0, int), 0, (np.nan,) * 4))
+    x, s, z, status, it = ipm(As, bs, e, max_iter=max_iter, stop=early)
     if why is None:
         why = {}
     if status == "failed":
@@ -82,20 +89,20 @@ def solve_max(A, b, e, *, max_iter=80, interior=False, why=None, accept=None):
         got = accept(DenseAnswer("interior", x, z / rn, np.zeros(0, int), it, (np.nan,) * 4))
         if got is not None:
             return got, None
-    ans, tab = _crossover(A, b, e, As, s, z, it)
-    if ans is None:
-        why.update(reason="crossover from the interior point not certified",
-                   basis=identify_basis(As, z, s, n))
+    T = identify_basis(As, z, s, n)
+    ans, tab = _crossover(A, b, e, T, As, s, z, it)
+    if ans is None:  # (the identified basis once: 33 s at N = 2000 before it was blocked)
+        why.update(reason="crossover from the interior point not certified", basis=T)
     if ans is None and interior:
         ans = DenseAnswer("interior", x, z / rn, np.zeros(0, int), it, (np.nan,) * 4)
     return ans, tab
 
 
-def _crossover(A, b, e, As, s, z, it):
-    """An optimal basis from the interior point's iterate, finished by the simplex and
-    certified (:func:`solve_max`); ``(None, None)`` if that fails."""
+def _crossover(A, b, e, T, As, s, z, it):
+    """An optimal basis from the interior point's iterate (``T``: the basis it identifies,
+    :func:`~.ipm.identify_basis`), finished by the simplex and certified (:func:`solve_max`);
+    ``(None, None)`` if that fails."""
     n = A.shape[1]
-    T = identify_basis(As, z, s, n)
     tab = Tableau(A, b, e, T) if T is not None else None
     first = completed = tab
     if tab is not None and not tab.singular and not tab.dual_feasible:

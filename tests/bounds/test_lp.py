@@ -361,3 +361,47 @@ def test_vectorised_sharing_follows_the_same_rule(seed):
             res.append((out, done))
         np.testing.assert_array_equal(res[0][1], res[1][1])
         np.testing.assert_array_equal(res[0][0], res[1][0])
+
+
+def _independent_rows_one_by_one(A, order, n, rtol=1e-9, floor=0.0):
+    """The row-by-row Gram-Schmidt that :func:`~shakedown.bounds.ipm._independent_rows` blocks."""
+    Q, picked = np.empty((n, A.shape[1])), []
+    for i in order:
+        a = A[i]
+        na = np.linalg.norm(a)
+        if na == 0.0:
+            continue
+        r = a - (a @ Q[: len(picked)].T) @ Q[: len(picked)]
+        r -= (r @ Q[: len(picked)].T) @ Q[: len(picked)]
+        if np.linalg.norm(r) > rtol * max(na, floor):
+            Q[len(picked)] = r / np.linalg.norm(r)
+            picked.append(int(i))
+            if len(picked) == n:
+                return np.sort(picked)
+    return None
+
+
+@pytest.mark.parametrize("block", [1, 3, 7, 64])
+@pytest.mark.parametrize("seed", range(4))
+def test_blocked_independent_rows_pick_the_rows_of_the_row_by_row_rule(block, seed):
+    """Issue 26: the blocked Gram-Schmidt picks the same rows as the row-by-row one, with
+    dependent rows (sums of earlier rows, inside a block and across block boundaries), zero
+    rows, duplicates and a rank below ``n``."""
+    from shakedown.bounds.ipm import _independent_rows
+
+    rng = np.random.default_rng(seed)
+    n = 12
+    V = rng.standard_normal((9, n))  # rank 9 < n from these alone
+    rows = [V[0], V[1], V[0] + V[1], np.zeros(n), V[2], V[2], *V[3:],
+            V[3] - 2 * V[5], rng.standard_normal(n), rng.standard_normal(n), V[1],
+            rng.standard_normal(n), rng.standard_normal(n)]
+    A = np.array(rows) * rng.uniform(0.5, 2.0, len(rows))[:, None]
+    order = rng.permutation(len(A))
+    for k in (n, n + 3):  # n reachable, then not: None
+        want = _independent_rows_one_by_one(A, order, k)
+        got = _independent_rows(A, order, k, block=block)
+        if want is None:
+            assert got is None
+        else:
+            assert got is not None and list(got) == list(want)
+    assert np.linalg.matrix_rank(A[_independent_rows(A, order, n, block=block)]) == n
