@@ -116,6 +116,7 @@ def ipm(A, b, e, *, tol=IPM_TOL, max_iter=80, stop=None):  # noqa: C901
         mu_aff = float((s + ap * ds) @ (z + ad * dz)) / R
         sigma = (mu_aff / mu) ** 3 if mu > 0 else 0.0
         dx2, ds2, dz2 = _direction(A, solve, rd, rp, s, z, sigma * mu - ds * dz)
+        dx2, ds2, dz2 = _centrality(A, solve, s, z, sigma * mu, (dx2, ds2, dz2))
         ap, ad = 0.99 * _step(s, ds2), 0.99 * _step(z, dz2)
         x = x + ap * dx2
         s = s + ap * ds2
@@ -132,6 +133,44 @@ def ipm(A, b, e, *, tol=IPM_TOL, max_iter=80, stop=None):  # noqa: C901
     else:
         status = "failed"
     return x, s, z, status, it
+
+
+def _centrality(A, solve, s, z, target, direction):
+    """Gondzio's multiple centrality correctors: up to :data:`CORRECTORS` corrections of the
+    predictor-corrector ``direction`` toward a point whose complementarity products
+    ``s_i z_i`` lie in ``[BETA_MIN, BETA_MAX] * target``, each one solve with the factor at hand
+    (no new normal matrix), kept while it lengthens the step by at least
+    ``GAMMA * STEP_AIM``.
+
+    Issue 26 (a 2000-crack network's ``lam2`` LP, 4001 x 2001): without them the steps were
+    0.25-0.7 for 18 iterations (a few badly centred pairs block them), 30 iterations of
+    ~0.8 s.  Reference: J. Gondzio, Multiple centrality corrections in a primal-dual method for
+    linear programming, Computational Optimization and Applications 6 (1996) 137-156."""
+    dx, ds, dz = direction
+    ap, ad = _step(s, ds), _step(z, dz)
+    zero = np.zeros(len(s))
+    for _ in range(CORRECTORS):
+        if min(ap, ad) >= 1.0:
+            break
+        ap_t, ad_t = min(1.0, ap + STEP_AIM), min(1.0, ad + STEP_AIM)
+        v = (s + ap_t * ds) * (z + ad_t * dz)
+        lo, hi = BETA_MIN * target, BETA_MAX * target
+        t = np.where(v < lo, lo - v, np.where(v > hi, np.maximum(hi - v, -hi), 0.0))
+        cx, cs, cz = _direction(A, solve, zero[: A.shape[1]], zero, s, z, t + s * z)
+        nx, ns, nz = dx + cx, ds + cs, dz + cz
+        ap_n, ad_n = _step(s, ns), _step(z, nz)
+        if min(ap_n, ad_n) < min(ap, ad) + GAMMA * STEP_AIM:
+            break
+        dx, ds, dz, ap, ad = nx, ns, nz, ap_n, ad_n
+    return dx, ds, dz
+
+
+#: Centrality correctors per iteration at most (:func:`_centrality`, Gondzio 1996).
+CORRECTORS = 2
+#: How much longer a step each corrector aims at, and the gain it must bring (a fraction).
+STEP_AIM, GAMMA = 0.2, 0.1
+#: The box of complementarity products the correctors aim at, relative to ``sigma mu``.
+BETA_MIN, BETA_MAX = 0.1, 10.0
 
 
 def _direction(A, solve, rd, rp, s, z, rc):
