@@ -23,6 +23,7 @@ of a round), vectorised over the LPs: no Python loop over earlier pivots.  Memor
 
 from __future__ import annotations
 
+import functools
 import warnings
 
 import numpy as np
@@ -66,12 +67,35 @@ class Tableau:
         if self.singular:
             self.y0 = np.full(n, -np.inf)
             return
-        self.Binv = sla.lu_solve(lu, np.eye(n), check_finite=False)  # A_T0^-1
-        self.y0 = self.Binv.T @ self.e
-        self.W = self.Binv.T @ self.A.T  # (n, R): column i = row i in basis coordinates
-        self.x0 = self.Binv @ self.b[self.T0]
-        self.act0 = self.A @ self.x0
-        self.scale_x = max(float(np.abs(self.x0).max(initial=0.0)), 1.0)
+        self._lu = lu
+        # the multipliers now (one solve); the inverse and the tableau on first use: a basis
+        # whose multipliers are refused is dropped without them (issue 26, N = 2000: an
+        # O(n^2 R) tableau of ~2 s for each of the crossover's refused bases)
+        self.y0 = sla.lu_solve(lu, self.e, trans=1, check_finite=False)
+
+    @functools.cached_property
+    def Binv(self):
+        """``A_T0^-1``, shape (n, n)."""
+        return sla.lu_solve(self._lu, np.eye(self.n), check_finite=False)
+
+    @functools.cached_property
+    def W(self):
+        """``A_T0^-T A^T``, shape (n, R): column ``i`` = row ``i`` in basis coordinates."""
+        return self.Binv.T @ self.A.T
+
+    @functools.cached_property
+    def x0(self):
+        """The basic solution, shape (n,)."""
+        return sla.lu_solve(self._lu, self.b[self.T0], check_finite=False)
+
+    @functools.cached_property
+    def act0(self):
+        """``A x0``, shape (R,)."""
+        return self.A @ self.x0
+
+    @functools.cached_property
+    def scale_x(self):
+        return max(float(np.abs(self.x0).max(initial=0.0)), 1.0)
 
     @property
     def dual_feasible(self) -> bool:

@@ -272,9 +272,11 @@ def complete_basis(A, z, s, e, n, max_missing=None):
     k = n - m
     if k <= 0:
         return None
-    Qf, _ = np.linalg.qr(A[C].T, mode="complete")
+    Qf, Rf = np.linalg.qr(A[C].T, mode="complete")
     Q = Qf[:, m:]
-    if np.linalg.matrix_rank(A[C]) < m:
+    # rank of A_C from the triangular factor at hand (an SVD of A_C took 3-9 s at N = 2000)
+    rd = np.abs(np.diag(Rf))
+    if not rd.min() > rd.max() * max(A.shape) * np.finfo(float).eps:
         return None
     rest = np.setdiff1d(np.arange(A.shape[0]), C)
     P = A[rest] @ Q  # projections of the candidate rows, (R - m, k)

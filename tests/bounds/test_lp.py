@@ -405,3 +405,43 @@ def test_blocked_independent_rows_pick_the_rows_of_the_row_by_row_rule(block, se
         else:
             assert got is not None and list(got) == list(want)
     assert np.linalg.matrix_rank(A[_independent_rows(A, order, n, block=block)]) == n
+
+
+def test_complete_basis_refuses_dependent_strongly_active_rows():
+    """The strongly active rows must be independent (their rank from the QR factor at hand,
+    issue 26, formerly an SVD): three strongly active rows of rank 2 give no completion, three
+    independent ones a non-singular basis that contains them."""
+    from shakedown.bounds.ipm import complete_basis
+
+    rng = np.random.default_rng(11)
+    n = 6
+    V = rng.standard_normal((n, n))
+    rest = rng.standard_normal((8, n))
+    r = np.r_[1e3, 1e3, 1e3, 1e-6 * rng.uniform(1, 2, 8)]  # z / s: 3 strongly active rows
+    e = V[0] + V[1]
+    A_dep = np.vstack([V[0], V[1], V[0] + V[1], rest])
+    assert complete_basis(A_dep, r, np.ones(len(r)), e, n) is None
+    A_ind = np.vstack([V[0], V[1], V[2], rest])
+    T = complete_basis(A_ind, r, np.ones(len(r)), e, n)
+    assert T is not None and {0, 1, 2} <= set(T.tolist())
+    assert np.linalg.matrix_rank(A_ind[T]) == n
+
+
+def test_tableau_builds_its_inverse_and_tableau_only_on_use():
+    """Issue 26: a basis refused for its multipliers costs one LU factorisation, not the
+    ``O(n^2 R)`` tableau; what is computed on use equals the direct formulas."""
+    from shakedown.bounds.dual_simplex import Tableau
+
+    rng = np.random.default_rng(3)
+    R, n = 30, 8
+    A, b, e = rng.standard_normal((R, n)), rng.uniform(1, 2, R), rng.standard_normal(n)
+    tab = Tableau(A, b, e, np.arange(n))
+    tab.dual_feasible  # noqa: B018 (the check a refused basis gets)
+    assert not {"Binv", "W", "x0", "act0"} & set(vars(tab))
+    As = A / np.linalg.norm(A, axis=1)[:, None]
+    B = As[:n]
+    np.testing.assert_allclose(tab.y0, np.linalg.solve(B.T, e), rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(tab.Binv, np.linalg.inv(B), rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(tab.W, np.linalg.solve(B.T, As.T), rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(tab.x0, np.linalg.solve(B, tab.b[:n]), rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(tab.act0, As @ tab.x0, rtol=1e-12, atol=1e-12)
