@@ -25,8 +25,8 @@ big      ``solve_cycles`` of a coupled random system with ``--big-n`` nodes to t
 answers  The cyclic runs of ``ANSWER_PROBLEMS`` (N = 6..150, two seeds, two load factors, 32
          steps per period) in this tree and in ``--baseline``: periods, differences of the
          answers, Newton iterations, CPU.
-chord    Chord factors per step of the period on and off (``ConeStepSolver.chord_reset``): the
-         steps of period 3 and whole runs to the steady cycle, CPU per step (:func:`part_chord`).
+hot      The warm steps of period 3 timed in sequence and each repeated in place (hot caches):
+         how much of a step is the memory traffic between steps (:func:`part_hot`).
 order    The convergence order in the number of steps per period: the rotating-load node
          (closed form ``W = 2 pi f P sqrt(Q^2 - f^2 P^2) / k``) and a coupled 4-node system
          (reference: 2048 steps); error, observed order and wall time per S (the
@@ -149,79 +149,25 @@ def time_steps(sol, RB, guesses, products=None):
     return np.array(wall), np.array(cpu), np.array(R)
 
 
-def part_chord(n, lam, repeats, seed=0, S=64, settle=2):
-    """Chord matrices per step of the period (``ConeStepSolver.chord_reset``) on and off, in one
-    process, interleaved: (1) the steps of period ``settle + 1`` from the same step of the
-    previous period (the chord factors from period ``settle``, restored before every repeat so
-    that each repeat starts from the same cache; a refactorisation in the timed period is timed
-    with its step), CPU per step; (2) whole runs of ``solve_cycles`` to the steady cycle, CPU
-    per step including every factorisation.  Returns a dict of medians and counts."""
-    import shakedown as sd
-    from shakedown.evolution.cone_step import ConeStepSolver
-
-    s, load = coupled_system_3d(n, seed=seed)
-    sol = ConeStepSolver(s)
-    sol.chord_reset(S)
-    qg, pg = load.evaluate(np.arange(1, S + 1) / S, lam)
-    v = np.zeros((n, 2))
-    U_prev = KU_prev = None
-    for _ in range(settle):
-        U, KU = [], []
-        for j in range(S):
-            rb = sol.base(v, qg[j], pg[j])
-            g = U_prev[j] if U_prev is not None else (U[-1] if U else None)
-            u, r, *_ = sol.solve_raw(rb, g, equilibrium=False, slot=j)
-            U.append(u)
-            KU.append(r - rb)
-            v = v + u[:, :2]
-        U_prev, KU_prev = U, KU
-    RB = []
-    for j in range(S):  # the bases of the timed period (its own path)
-        RB.append(sol.base(v, qg[j], pg[j]))
-        u, *_ = sol.solve_raw(RB[-1], U_prev[j], equilibrium=False, ku0=KU_prev[j])
-        v = v + u[:, :2]
-    snap = (dict(sol._chord), set(sol._chord_seen), sol._chord_bytes)
-    cpu = {"on": [], "off": []}
-    counts = {}
-    answers = {}
-    for _ in range(repeats):
-        for mode in ("on", "off"):
-            sol._chord, sol._chord_seen, sol._chord_bytes = dict(snap[0]), set(snap[1]), snap[2]
-            sol.chord_on = mode == "on"
-            t0 = dict(sol.totals)
-            c, R = [], []
-            for j in range(S):
-                c0 = time.process_time()
-                out = sol.solve_raw(RB[j], U_prev[j], equilibrium=True, ku0=KU_prev[j], slot=j)
-                c.append(time.process_time() - c0)
-                R.append(out[1])
-            cpu[mode].append(c)
-            counts[mode] = {k: sol.totals[k] - t0[k] for k in t0}
-            answers[mode] = np.array(R)
-    F = float(np.abs(np.array(RB)).max())
-    res = dict(seed=seed, p3={m: float(np.median(np.median(np.array(c), axis=0)))
-                              for m, c in cpu.items()}, counts=counts,
-               p3_diff=float(np.abs(answers["on"] - answers["off"]).max() / F))
-    runs = {"on": [], "off": []}
-    info = {}
-    for _ in range(repeats):
-        for mode in ("on", "off"):
-            sol = ConeStepSolver(s)
-            if mode == "off":
-                sol.chord_reset = lambda n_slots, budget=0, f=sol.chord_reset: f(n_slots, 0)
+def part_hot(n, lam, repeats, seed=0):
+    """The warm steps of period 3 (as in :func:`part_siconos`) timed in sequence, as a cyclic
+    run meets them (each step's data, ``K`` of (3N)^2 doubles and the reduced matrices, partly
+    evicted from the caches by the previous step), and each step repeated in place (``repeats +
+    1`` solves in a row, the median of the last ``repeats``: hot caches).  CPU per step [s]:
+    medians over the steps, and the median per-step ratio sequence / hot."""
+    sol, RB, U0, KU0, _, _ = period_steps(*coupled_system_3d(n, seed=seed), lam)
+    seq = np.median([time_steps(sol, RB, U0, KU0)[1] for _ in range(repeats)], axis=0)
+    hot = []
+    for rb, g, ku in zip(RB, U0, KU0, strict=True):
+        c = []
+        for _ in range(repeats + 1):
             c0 = time.process_time()
-            run = sd.solve_cycles(s, load, lam, steps_per_cycle=S, solver=sol)
-            runs[mode].append((time.process_time() - c0) / run.statistics["n_steps"])
-            info[mode] = (run.n_cycles, run.statistics["newton_iterations"],
-                          run.statistics["chord_steps"], run.statistics["chord_matrices"],
-                          run.steady_dissipation, run.final_slip)
-    res["run"] = {m: float(np.median(x)) for m, x in runs.items()}
-    res["run_worst"] = {m: float(np.max(x)) for m, x in runs.items()}
-    res["info"] = {m: i[:5] for m, i in info.items()}
-    res["run_W_diff"] = abs(info["on"][4] / info["off"][4] - 1)
-    res["run_slip_diff"] = float(np.abs(info["on"][5] - info["off"][5]).max()
-                                 * np.diag(s.A).max() / F)
-    return res
+            sol.solve_raw(rb, g, equilibrium=True, ku0=ku)
+            c.append(time.process_time() - c0)
+        hot.append(np.median(c[1:]))
+    hot = np.array(hot)
+    return dict(seed=seed, seq=float(np.median(seq)), hot=float(np.median(hot)),
+                ratio=float(np.median(seq / hot)))
 
 
 def part_steptimes(inp, out):
@@ -473,24 +419,14 @@ def main():
             lines.append(f"| {start} | {np.median(x):.1f}x | {x.min():.1f}x | "
                          f"{np.median(y):.2f}x |")
         lines.append("")
-    if "chord" in parts:
-        lines += ["## Chord factors per step of the period: on / off (one process, interleaved)",
-                  "", "| seed | period 3, CPU per step on / off [ms] | off / on | chord steps, "
-                  "factorisations, Newton its (on, period 3) | diff / F | whole run, CPU per "
-                  "step on / off [ms] (worst) | off / on | periods, Newton its, chord steps, "
-                  "factorisations (on; off) | W rel. diff, slip diff / (F / k) |",
-                  "|---|---|---|---|---|---|---|---|---|"]
+    if "hot" in parts:
+        lines += ["## Warm steps of period 3: in sequence against repeated in place (CPU)", "",
+                  "| seed | in sequence [ms] | repeated in place [ms] | sequence / in place "
+                  "(median per step) |", "|---|---|---|---|"]
         for seed in range(a.seeds):
-            r = part_chord(a.n, a.lam, a.repeats, seed=seed)
-            p3, ru, rw, co = r["p3"], r["run"], r["run_worst"], r["counts"]["on"]
-            i_on, i_off = r["info"]["on"], r["info"]["off"]
-            lines.append(
-                f"| {seed} | {1e3 * p3['on']:.3f} / {1e3 * p3['off']:.3f} | "
-                f"{p3['off'] / p3['on']:.2f}x | {co['chord_steps']}, {co['chord_matrices']}, "
-                f"{co['iterations']} | {r['p3_diff']:.1e} | {1e3 * ru['on']:.3f} "
-                f"({1e3 * rw['on']:.3f}) / {1e3 * ru['off']:.3f} ({1e3 * rw['off']:.3f}) | "
-                f"{ru['off'] / ru['on']:.2f}x | {i_on[0]}, {i_on[1]}, {i_on[2]}, {i_on[3]}; "
-                f"{i_off[0]}, {i_off[1]} | {r['run_W_diff']:.1e}, {r['run_slip_diff']:.1e} |")
+            r = part_hot(a.n, a.lam, a.repeats, seed=seed)
+            lines.append(f"| {seed} | {1e3 * r['seq']:.3f} | {1e3 * r['hot']:.3f} | "
+                         f"{r['ratio']:.2f}x |")
         lines += ["", f"Load after: {os.getloadavg()}", ""]
     if "big" in parts:
         r = part_big(a.big_n, a.big_lam, anderson=a.anderson, max_cycles=a.big_max_cycles)

@@ -24,11 +24,6 @@ p_w + B^T v)`` are the previous step's reactions minus its gaps' share plus the 
 welded load, and the reactions ``r_b + K u_0`` of a warm start come from the stored ``K U =
 r - r_b`` of the periods it combines; the equilibrium of every step is then checked once per
 period against base reactions recomputed from the slips (one matrix product per period).
-Chord matrices: each step passes its index in the period as ``slot`` to the step solver, which
-(when ``(2N)^2 * 8 * steps`` fits :data:`~.cone_step.CHORD_BUDGET`) keeps per step the inverse
-of the reduced Newton matrix at the previous period's answer and starts with chord steps
-(:meth:`~.cone_step.ConeStepSolver.chord_reset`); ``statistics`` counts them (``chord_steps``,
-``chord_matrices``).
 
 Acceleration (``anderson_memory > 0``, off by default): the start of the next period is the
 Anderson (type II) combination of the last ``anderson_memory + 1`` period starts ``x`` and their
@@ -216,7 +211,7 @@ def _period(solver, c, v, w, qg, pg, U_prev, st0, KU_prev=None):
     for j in range(n_steps):
         g = U_prev[j] if U_prev is not None else guess
         ku = KU_prev[j] if KU_prev is not None else None
-        u, r, s, name, it, res, F = solver.solve_raw(rb, g, equilibrium=False, ku0=ku, slot=j)
+        u, r, s, name, it, res, F = solver.solve_raw(rb, g, equilibrium=False, ku0=ku)
         ok = res.worst <= solver.feas_tol
         key = ("unique" if solver.well_posed else "solved") if ok else "failed"
         statuses[key] = statuses.get(key, 0) + 1
@@ -264,7 +259,6 @@ def _period(solver, c, v, w, qg, pg, U_prev, st0, KU_prev=None):
 def _run(system, solver, load, lam, v0, w0, n_steps, max_cycles, tol, progress, record_history,
          memory=0):
     t_start = time.perf_counter()
-    solver.chord_reset(n_steps)  # chord matrices per step of the period, if they fit
     tot0 = dict(solver.totals)
     d = solver.data
     grid = np.arange(1, n_steps + 1) / n_steps
@@ -353,8 +347,7 @@ def _finish_3d(system, solver, load, lam, n_steps, tol, F, records, history, per
                  active_set_iterations=tot["iterations"], factorizations=tot["iterations"],
                  low_rank_updates=0, cache_hits=0, lemke_calls=0, enumerations=0,
                  newton_iterations=tot["iterations"], cold_restarts=tot["cold_restarts"],
-                 gauss_seidel=tot["gauss_seidel"], chord_steps=tot["chord_steps"],
-                 chord_matrices=tot["chord_matrices"], wall_time=time.perf_counter() - t_start)
+                 gauss_seidel=tot["gauss_seidel"], wall_time=time.perf_counter() - t_start)
     run = CycleRun(
         dissipation=np.asarray(W_list, float), steady_dissipation=steady_W,
         shook_down=bool(shook), period=int(period), stuck_nodes=np.asarray(stuck, int),

@@ -40,22 +40,12 @@ from __future__ import annotations
 import numpy as np
 
 from .cone_linear import DENSE_MAX
-from .cone_reduced import _newton_point, chord_matrix, chord_point, new_buffers, new_kept
+from .cone_reduced import _newton_point, new_buffers, new_kept
 from .cone_states import SEPARATED, SLIP, STICK
 from .kernel_jit import HAVE_KERNEL, njit
 
 #: Exit codes of :func:`newton`.
 CONVERGED, STALLED, MAX_ITER, SINGULAR = 0, 1, 2, 3
-
-#: A chord step (:func:`.cone_reduced.chord_point`) is kept only when the full step reduces
-#: ``max |phi|`` at least by this factor; otherwise the call goes on with Newton steps.
-CHORD_RATE = 0.1
-
-
-@njit(cache=True)
-def no_chord(n):
-    """No chord matrix (:func:`newton_cached`): ``(LT, piv, states)``."""
-    return np.empty((0, 0)), np.empty(0, np.int32), np.full(n, -1, np.int8)
 
 
 @njit(cache=True)
@@ -114,15 +104,13 @@ def _classify(r, u, sx, sy, g, rhoT, rhoN, states, phi, nhat, cfac, slack):
 def newton(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, dense_max=DENSE_MAX,
            slack=0.0, scale=0.0, given_r=False):
     """:func:`newton_cached` with fresh buffers (arguments and returns as there)."""
-    LT, piv, cst = no_chord(g.size)
     return newton_cached(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, dense_max,
-                         slack, scale, given_r, new_buffers(g.size), LT, piv, cst,
-                         np.zeros(2, np.int64))
+                         slack, scale, given_r, new_buffers(g.size))
 
 
 @njit(cache=True)
 def newton_cached(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, dense_max, slack,
-                  scale, given_r, buffers, chord, cpiv, cstates, cstats):
+                  scale, given_r, buffers):
     """Semismooth Newton on the Alart-Curnier equations from the guess ``u`` (in place).
 
     Parameters
@@ -156,19 +144,6 @@ def newton_cached(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, de
         ``r`` holds the guess's reactions on entry (one product with ``Kn`` saved).
     buffers : tuple
         :func:`.cone_reduced.new_buffers` of ``N`` nodes (the solver's, reused by every call).
-    chord, cpiv : ndarray, shapes (m, m) or (0, 0), and (m,) of int32
-        LU factors (``lu.T`` and pivots of :func:`scipy.linalg.lu_factor`) of a reduced matrix
-        of the piece ``cstates`` (:func:`.cone_reduced.chord_matrix`, e.g. at the answer of the
-        same step of the previous period), or empty.  While the current piece is
-        ``cstates``, iterations take the chord step (:func:`.cone_reduced.chord_point`) instead
-        of assembling a matrix; the first chord step that fails the line search at full length
-        or reduces ``max |phi|`` by less than :data:`CHORD_RATE` is undone (if it did not
-        decrease the merit) and the call goes on with Newton steps.  The stopping test is the
-        same.
-    cstates : ndarray of int8, shape (N,)
-        The piece of ``chord``.
-    cstats : ndarray of int64, shape (2,)
-        Incremented in place: chord steps kept, chord steps rejected (0 or 1).
 
     Returns
     -------
@@ -189,7 +164,6 @@ def newton_cached(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, de
     dr = np.empty(3 * n)
     zero = np.zeros(3 * n)
     kept = new_kept(n)
-    use_chord = chord.shape[0] > 0
     if not given_r:
         _reactions(Kn, rb, u, r)
     merit = _classify(r, u, sx, sy, g, rhoT, rhoN, states, phi, nhat, cfac, slack)
@@ -199,23 +173,11 @@ def newton_cached(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, de
             return CONVERGED, it, np.max(np.abs(phi))
         it += 1
         res = np.max(np.abs(phi))
-        chord_now = use_chord
-        for i in range(n):
-            if not chord_now:
-                break
-            if states[i] != cstates[i]:
-                chord_now = False
-        if chord_now:
-            ok = chord_point(Kn, rb, r, u, states, nhat, cfac, sx, sy, g, rhoT, chord, cpiv,
-                             unew)
-            if not ok:
-                chord_now = use_chord = False
-        if not chord_now:
-            eta = max(min(1e-2, res / scale), 0.1 * tol / res) if scale > 0.0 else 0.0
-            ok, kept = _newton_point(Kn, rb, r, sx, sy, g, rhoT, states, nhat, cfac, unew,
-                                     dense_max, u, eta, buffers, kept)
-            if not ok:
-                return SINGULAR, it, np.max(np.abs(phi))
+        eta = max(min(1e-2, res / scale), 0.1 * tol / res) if scale > 0.0 else 0.0
+        ok, kept = _newton_point(Kn, rb, r, sx, sy, g, rhoT, states, nhat, cfac, unew, dense_max,
+                                 u, eta, buffers, kept)
+        if not ok:
+            return SINGULAR, it, np.max(np.abs(phi))
         for k in range(3 * n):  # the Newton direction and its reactions, once
             unew[k] -= u[k]
         _reactions(Kn, zero, unew, dr)
@@ -231,19 +193,8 @@ def newton_cached(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, de
                                                      and np.max(np.abs(phi_try)) <= tol):
                 accepted = True
                 break
-            if chord_now:  # a chord step is taken at full length or not at all
-                break
             alpha *= 0.5
-        if chord_now:
-            rt = np.max(np.abs(phi_try))
-            if accepted and (rt <= CHORD_RATE * res or rt <= tol):
-                cstats[0] += 1
-            else:  # go on with Newton steps (from the chord point if it is better)
-                cstats[1] += 1
-                use_chord = False
-                if not mt < merit:
-                    continue
-        elif not accepted:
+        if not accepted:
             return STALLED, it, np.max(np.abs(phi))
         u[:] = utry
         r[:] = rtry
@@ -255,20 +206,6 @@ def newton_cached(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, de
     if np.max(np.abs(phi)) <= tol:
         return CONVERGED, it, np.max(np.abs(phi))
     return MAX_ITER, it, np.max(np.abs(phi))
-
-
-@njit(cache=True)
-def chord_at(Kn, sx, sy, g, rhoT, rhoN, u, r, slack):
-    """The reduced matrix (:func:`.cone_reduced.chord_matrix`) at the answer ``(u, r)``: its
-    piece and directions by :func:`_classify` with the stick ``slack`` [force] of the solve.
-    Returns ``(J, states)``."""
-    n = g.size
-    states = np.empty(n, np.int8)
-    phi = np.empty(3 * n)
-    nhat = np.zeros(2 * n)
-    cfac = np.zeros(n)
-    _classify(r, u, sx, sy, g, rhoT, rhoN, states, phi, nhat, cfac, slack)
-    return chord_matrix(Kn, states, nhat, cfac, sx, sy, g, rhoT), states
 
 
 @njit(cache=True)
@@ -315,8 +252,7 @@ def gauss_seidel(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_sweeps, l
 
 
 __all__ = ["newton", "newton_cached", "new_buffers", "attempt", "gauss_seidel", "STICK", "SLIP",
-           "SEPARATED", "HAVE_KERNEL", "CONVERGED", "STALLED", "MAX_ITER", "SINGULAR",
-           "CHORD_RATE", "no_chord", "chord_at", "chord_matrix"]
+           "SEPARATED", "HAVE_KERNEL", "CONVERGED", "STALLED", "MAX_ITER", "SINGULAR"]
 
 
 @njit(cache=True)
@@ -346,13 +282,12 @@ def residuals(Kn, rb, sx, sy, g, kT, kN, u, r, F, equilibrium):
 
 @njit(cache=True)
 def attempt(Kn, rb, sx, sy, g, rhoT, rhoN, kT, kN, u, r, states, feas_tol, max_iter, dense_max,
-            stick_slack, given_r, buffers, equilibrium, chord, cpiv, cstates, cstats):
+            stick_slack, given_r, buffers, equilibrium):
     """One Newton attempt of the step and the verification of its answer in one call (the
     step solver's path, :meth:`~.cone_step.ConeStepSolver.solve_raw`): the force scale ``F =
     max |rb|`` (1 if zero), :func:`newton_cached` to ``tol = 1e-3 feas_tol F`` with the stick
     slack ``stick_slack feas_tol F`` and inexact solves at the scale ``F``, then
-    :func:`residuals`.  Arguments as there (``u``, ``r``, ``states``, ``cstats`` in place; ``chord``,
-    ``cpiv``, ``cstates``: :func:`newton_cached`'s chord factors and their piece).  Returns
+    :func:`residuals`.  Arguments as there (``u``, ``r``, ``states`` in place).  Returns
     ``(code, iterations, F, cone, direction, normal, equilibrium)``."""
     F = 0.0
     for k in range(rb.size):
@@ -360,6 +295,6 @@ def attempt(Kn, rb, sx, sy, g, rhoT, rhoN, kT, kN, u, r, states, feas_tol, max_i
     F = F if F > 0.0 else 1.0
     code, it, _ = newton_cached(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, 1e-3 * feas_tol * F,
                                 max_iter, dense_max, stick_slack * feas_tol * F, F, given_r,
-                                buffers, chord, cpiv, cstates, cstats)
+                                buffers)
     cone, direc, normal, eq = residuals(Kn, rb, sx, sy, g, kT, kN, u, r, F, equilibrium)
     return code, it, F, cone, direc, normal, eq

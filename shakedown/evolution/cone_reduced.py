@@ -22,14 +22,6 @@ or is redone with a fresh matrix (:func:`.cone_linear._krylov` with ``exact=Fals
 Newton method checks its own residual after every step, as before.  (Two Newton iterations per
 warm step are typical; the rows whose directions moved less than ``eta`` are 20-50 % of them at
 N = 100.)
-
-Chord steps across periods (:func:`chord_matrix`, :func:`chord_point`): a cyclic run solves the
-same step of every period with the same piece and a reduced matrix that changes by ~1e-5
-relative from one period to the next.  The inverse of the reduced matrix at the answer of the
-same step of the previous period then gives the Newton step of the current piece without
-assembling a matrix: ``x = x0 + J_c^-1 r0`` (LU factors) with the exact residual ``r0`` of
-:func:`_start`
-(a chord step: the solution of the exact equations is unchanged, only the path towards it).
 """
 
 from __future__ import annotations
@@ -220,76 +212,6 @@ def _newton_point(Kn, rb, r, sx, sy, g, rhoT, states, nhat, cfac, unew, dense_ma
 
 
 @njit(cache=True)
-def chord_point(Kn, rb, r, u, states, nhat, cfac, sx, sy, g, rhoT, LT, piv, unew):
-    """The chord step of the current piece at ``(u, r)`` with the LU factors ``(LT, piv)`` of a
-    reduced matrix of the same piece (:func:`chord_matrix`, factored by
-    :func:`scipy.linalg.lu_factor`; ``LT`` its ``lu.T``, C-contiguous): ``unew`` (3N,) = the
-    point after the step; returns False if the factors do not fit the piece or the step is not
-    finite (own index buffers: a kept matrix's in :func:`new_buffers` stay valid)."""
-    idx, cs = np.empty(3 * g.size, np.int64), np.empty(3 * g.size)
-    m = _unknowns(Kn, states, idx, cs)
-    unew[:] = 0.0
-    if m != LT.shape[0]:
-        return False
-    h, r0 = _start(Kn, rb, r, u, states, nhat, cfac, sx, sy, g, rhoT, m)
-    if piv.size == 0:  # LT holds the inverse
-        r0 = LT @ r0
-    else:
-        lu_solve(LT, piv, r0)
-    for col in range(m):
-        r0[col] += u[idx[col]] / cs[col]
-    return _scatter(r0, idx, cs, m, unew)
-
-
-@njit(cache=True)
-def lu_solve(LT, piv, b):
-    """``b = A^-1 b`` in place from LAPACK's ``getrf`` factors of ``A`` (m, m): ``LT = lu.T``
-    (C-contiguous: the columns of ``L`` and ``U`` are rows, so both sweeps are contiguous axpys)
-    and the 0-based row interchanges ``piv`` (:func:`scipy.linalg.lu_factor`)."""
-    m = b.size
-    for i in range(m):
-        p = piv[i]
-        if p != i:
-            b[i], b[p] = b[p], b[i]
-    for j in range(m):  # L y = P b (unit diagonal)
-        bj = b[j]
-        if bj != 0.0:
-            Lj = LT[j]
-            for i in range(j + 1, m):
-                b[i] -= Lj[i] * bj
-    for j in range(m - 1, -1, -1):  # U x = y
-        Uj = LT[j]
-        bj = b[j] / Uj[j]
-        b[j] = bj
-        for i in range(j):
-            b[i] -= Uj[i] * bj
-
-
-@njit(cache=True)
-def chord_matrix(Kn, states, nhat, cfac, sx, sy, g, rhoT):
-    """The fresh reduced matrix (m, m) of the piece ``states`` with the directions ``nhat`` and
-    factors ``cfac`` (the classification of an answer), to be factored for :func:`chord_point`
-    (``O(m^3)``: paid once per step of the period and reused over the following periods)."""
-    n = g.size
-    idx, cs = np.empty(3 * n, np.int64), np.empty(3 * n)
-    m = _unknowns(Kn, states, idx, cs)
-    J = np.empty((m, m))
-    row = 0
-    for i in range(n):
-        if states[i] == SLIP:
-            _slip_rows(J, row, i, Kn, idx, cs, m, nhat[2 * i], nhat[2 * i + 1], cfac[i], sx, sy,
-                       g, rhoT)
-            row += 2
-        elif states[i] == SEPARATED:
-            for a in range(3):
-                Ka = Kn[3 * i + a]
-                for col in range(m):
-                    J[row, col] = Ka[idx[col]] * cs[col]
-                row += 1
-    return J
-
-
-@njit(cache=True)
 def _scatter(x, idx, cs, m, unew):
     """``unew[idx] = x cs``; False if not finite (a singular matrix)."""
     for col in range(m):
@@ -300,5 +222,4 @@ def _scatter(x, idx, cs, m, unew):
     return True
 
 
-__all__ = ["_newton_point", "_unknowns", "_start", "new_buffers", "new_kept", "chord_point",
-           "chord_matrix", "lu_solve"]
+__all__ = ["_newton_point", "_unknowns", "_start", "new_buffers", "new_kept"]

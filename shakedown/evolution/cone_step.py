@@ -19,11 +19,9 @@ zero); a slip or gap of node ``i`` is measured by the reaction its own stiffness
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import LinAlgWarning, lu_factor
 
 from ..model.errors import InputError, ShapeError
 from . import cone_kernel as ck
@@ -33,14 +31,6 @@ from .step_types import FEAS_TOL, StepResult
 #: solved as stuck (the 2-D active set accepts up to ``feas_tol * F``): slips far below the
 #: verification tolerance do not linger, and an embedded 2-D system takes the 2-D path.
 STICK_SLACK = 0.5
-
-#: Memory budget [bytes] of the chord matrices a solver keeps per step of the period
-#: (:meth:`ConeStepSolver.chord_reset`): caching is on for a run only when ``(2N)^2 * 8 *
-#: steps`` fits (N = 100 at 64 steps: 20 MB; N = 1000: 1.6 GB, off).
-CHORD_BUDGET = 64 * 2**20
-
-#: Experiment: keep the explicit inverse instead of the LU factors (products, no triangular solves).
-CHORD_INVERSE = bool(int(__import__("os").environ.get("SHAKEDOWN_CHORD_INVERSE", "0")))
 
 #: State names of 3-D steps, indexed by the codes of :mod:`.cone_kernel` (2 is unused).
 STATE_NAMES_3D = ("stick", "slip", "unused", "separation")
@@ -207,52 +197,7 @@ class ConeStepSolver:
             self.well_posed = not self.data.coupled
         # the Newton method's buffers (unknowns, reduced matrix), reused by every step
         self._buffers = ck.new_buffers(self.n)
-        self._no_chord = ck.no_chord(self.n)
-        self.chord_reset(0)
-        self.totals = dict(steps=0, iterations=0, cold_restarts=0, gauss_seidel=0, failed=0,
-                           chord_steps=0, chord_rejected=0, chord_matrices=0)
-
-    # ------------------------------------------------------------------ chord matrices
-    def chord_reset(self, n_slots: int, budget: int = CHORD_BUDGET):
-        """Forget the chord matrices and switch their cache on for ``n_slots`` steps of a period
-        when ``(2N)^2 * 8 * n_slots <= budget`` [bytes] (0: off).
-
-        With the cache on, :meth:`solve_raw` called with ``slot = j`` (the step of the period)
-        keeps, after a step that needed Newton iterations at a slot already visited, the LU
-        factors of the reduced Newton matrix at its answer (:func:`.cone_kernel.chord_at`,
-        ``O(m^3)``),
-        and the next visit of the slot (the same step of the next period) starts with chord
-        steps with it (:func:`.cone_kernel.newton_cached`): the same equations, tolerance and
-        verification; only the linear algebra of the iterations changes."""
-        self._chord: dict = {}
-        self._chord_seen: set = set()
-        self._chord_bytes = 0
-        self._chord_budget = int(budget)
-        self.chord_on = n_slots > 0 and (2 * self.n) ** 2 * 8 * n_slots <= budget
-
-    def _chord_keep(self, slot, u, r, F):
-        """Store the chord matrix at the answer ``(u, r)`` of ``slot`` (within the budget)."""
-        d = self.data
-        old = self._chord.pop(slot, None)
-        self._chord_bytes -= 0 if old is None else old[0].nbytes
-        J, st = ck.chord_at(d.Kn, d.sx, d.sy, d.g, self.rhoT, self.rhoN, u, r,
-                            STICK_SLACK * self.feas_tol * F)
-        if not J.size or self._chord_bytes + J.nbytes > self._chord_budget:
-            return
-        if CHORD_INVERSE:
-            try:
-                lu = np.linalg.inv(J).T
-            except np.linalg.LinAlgError:
-                return
-            piv = np.empty(0, np.int32)
-        else:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", LinAlgWarning)  # singular: checked below
-                lu, piv = lu_factor(J, overwrite_a=True, check_finite=False)
-        if np.all(np.isfinite(lu)) and (CHORD_INVERSE or np.all(np.diag(lu) != 0)):
-            self._chord[slot] = (lu.T, piv.astype(np.int32), st)
-            self._chord_bytes += lu.nbytes
-            self.totals["chord_matrices"] += 1
+        self.totals = dict(steps=0, iterations=0, cold_restarts=0, gauss_seidel=0, failed=0)
 
     # ------------------------------------------------------------------ base reactions
     def base(self, v_prev, q_w, p_w):
@@ -263,13 +208,12 @@ class ConeStepSolver:
         rb[:, 2] = np.asarray(p_w, float) + self.Bt @ v
         return rb
 
-    def solve_raw(self, rb, u0=None, equilibrium: bool = True, ku0=None, slot=None):
+    def solve_raw(self, rb, u0=None, equilibrium: bool = True, ku0=None):
         """Solve from base reactions ``rb`` (N, 3) and guess ``u0`` (N, 3) [warm start];
         ``equilibrium``: passed to :func:`verify_step`; ``ku0`` (N, 3): ``K u0`` in node order
         when the caller knows it (from earlier products with ``K``: the warm start then skips
         its own; the answer's equilibrium must then be checked, ``equilibrium=True`` or by the
-        caller); ``slot``: the step of the period (hashable) for the chord matrices of
-        :meth:`chord_reset` (None: not used).
+        caller).
 
         Returns ``(u, r, states, method, iterations, residuals, scale)``; ``u, r`` (N, 3)."""
         n = self.n
@@ -280,23 +224,16 @@ class ConeStepSolver:
         best = None
         iters = 0
         F = 1.0
-        slot = slot if self.chord_on else None
-        newton_its = 0  # iterations that were not chord steps
         for name, guess in tries:
             u = np.zeros(3 * n) if guess is None else np.array(guess, dtype=float).reshape(-1)
             given = guess is not None and ku0 is not None
             r = rbf + np.asarray(ku0, dtype=float).reshape(-1) if given else np.empty(3 * n)
             st = np.empty(n, np.int8)
-            chord = self._chord.get(slot, self._no_chord) if name == "newton" else self._no_chord
-            cstats = np.zeros(2, np.int64)
             code, it, F, *checks = ck.attempt(
                 d.Kn, rbf, d.sx, d.sy, d.g, self.rhoT, self.rhoN, d.kT, d.kN, u, r, st,
                 self.feas_tol, self.max_iter, self.dense_max, STICK_SLACK, given, self._buffers,
-                bool(equilibrium), *chord, cstats)
+                bool(equilibrium))
             iters += it
-            newton_its += it - int(cstats[0])
-            self.totals["chord_steps"] += int(cstats[0])
-            self.totals["chord_rejected"] += int(cstats[1])
             res = ConeResiduals(*checks)
             if best is None or res.worst < best[3].worst:
                 best = (u, r, st, res, name)
@@ -316,10 +253,6 @@ class ConeStepSolver:
             if res.worst < best[3].worst:
                 best = (u, r, st, res, "gauss_seidel")
         u, r, st, res, name = best
-        if slot is not None and res.worst <= self.feas_tol and newton_its > 0:
-            if slot in self._chord_seen:  # the second visit on: worth a matrix for the next
-                self._chord_keep(slot, u, r, F)
-            self._chord_seen.add(slot)
         self.totals["steps"] += 1
         self.totals["iterations"] += iters
         return u.reshape(n, 3), r.reshape(n, 3), st, name, iters, res, F
