@@ -25,6 +25,8 @@ big      ``solve_cycles`` of a coupled random system with ``--big-n`` nodes to t
 answers  The cyclic runs of ``ANSWER_PROBLEMS`` (N = 6..150, two seeds, two load factors, 32
          steps per period) in this tree and in ``--baseline``: periods, differences of the
          answers, Newton iterations, CPU.
+hot      The warm steps of period 3 timed in sequence and each repeated in place (hot caches):
+         how much of a step is the memory traffic between steps (:func:`part_hot`).
 order    The convergence order in the number of steps per period: the rotating-load node
          (closed form ``W = 2 pi f P sqrt(Q^2 - f^2 P^2) / k``) and a coupled 4-node system
          (reference: 2048 steps); error, observed order and wall time per S (the
@@ -145,6 +147,27 @@ def time_steps(sol, RB, guesses, products=None):
         cpu.append(time.process_time() - c0)
         R.append(out[1].ravel())
     return np.array(wall), np.array(cpu), np.array(R)
+
+
+def part_hot(n, lam, repeats, seed=0):
+    """The warm steps of period 3 (as in :func:`part_siconos`) timed in sequence, as a cyclic
+    run meets them (each step's data, ``K`` of (3N)^2 doubles and the reduced matrices, partly
+    evicted from the caches by the previous step), and each step repeated in place (``repeats +
+    1`` solves in a row, the median of the last ``repeats``: hot caches).  CPU per step [s]:
+    medians over the steps, and the median per-step ratio sequence / hot."""
+    sol, RB, U0, KU0, _, _ = period_steps(*coupled_system_3d(n, seed=seed), lam)
+    seq = np.median([time_steps(sol, RB, U0, KU0)[1] for _ in range(repeats)], axis=0)
+    hot = []
+    for rb, g, ku in zip(RB, U0, KU0, strict=True):
+        c = []
+        for _ in range(repeats + 1):
+            c0 = time.process_time()
+            sol.solve_raw(rb, g, equilibrium=True, ku0=ku)
+            c.append(time.process_time() - c0)
+        hot.append(np.median(c[1:]))
+    hot = np.array(hot)
+    return dict(seed=seed, seq=float(np.median(seq)), hot=float(np.median(hot)),
+                ratio=float(np.median(seq / hot)))
 
 
 def part_steptimes(inp, out):
@@ -396,6 +419,15 @@ def main():
             lines.append(f"| {start} | {np.median(x):.1f}x | {x.min():.1f}x | "
                          f"{np.median(y):.2f}x |")
         lines.append("")
+    if "hot" in parts:
+        lines += ["## Warm steps of period 3: in sequence against repeated in place (CPU)", "",
+                  "| seed | in sequence [ms] | repeated in place [ms] | sequence / in place "
+                  "(median per step) |", "|---|---|---|---|"]
+        for seed in range(a.seeds):
+            r = part_hot(a.n, a.lam, a.repeats, seed=seed)
+            lines.append(f"| {seed} | {1e3 * r['seq']:.3f} | {1e3 * r['hot']:.3f} | "
+                         f"{r['ratio']:.2f}x |")
+        lines += ["", f"Load after: {os.getloadavg()}", ""]
     if "big" in parts:
         r = part_big(a.big_n, a.big_lam, anderson=a.anderson, max_cycles=a.big_max_cycles)
         import shakedown
