@@ -50,7 +50,8 @@ def _primal_finish(A, b, e, tab, cap=None):
     return out if not out.singular and out.dual_feasible else None
 
 
-def solve_max(A, b, e, *, max_iter=80, interior=False, why=None, accept=None, stop=None):
+def solve_max(A, b, e, *, max_iter=80, interior=False, why=None, accept=None, stop=None,
+              correctors=0):
     """``max e.x s.t. A x <= b``: interior point, basis identification, dual simplex clean-up.
 
     Returns ``(answer, tableau)`` with the tableau of the optimal basis (for warm starts), or
@@ -69,7 +70,8 @@ def solve_max(A, b, e, *, max_iter=80, interior=False, why=None, accept=None, st
     a dense 1999 x 3999 ``linprog`` (:func:`~.ipm.complete_basis`) that ran for minutes.
     ``stop``: a callable given the same kind of answer at each iterate of the interior point
     (from merit :data:`~.ipm.APPROX_TOL` on); ``True`` ends the interior point there
-    (:func:`~.ipm.ipm`), and ``accept`` then decides.
+    (:func:`~.ipm.ipm`), and ``accept`` then decides.  ``correctors``: Gondzio's centrality
+    correctors of the interior point (:func:`~.ipm.ipm`; 0 where a vertex is wanted).
     """
     R, n = A.shape
     rn = np.linalg.norm(A, axis=1)
@@ -79,7 +81,7 @@ def solve_max(A, b, e, *, max_iter=80, interior=False, why=None, accept=None, st
     if stop is not None:
         def early(x, s, z):
             return stop(DenseAnswer("interior", x, z / rn, np.zeros(0, int), 0, (np.nan,) * 4))
-    x, s, z, status, it = ipm(As, bs, e, max_iter=max_iter, stop=early)
+    x, s, z, status, it = ipm(As, bs, e, max_iter=max_iter, stop=early, correctors=correctors)
     if why is None:
         why = {}
     if status == "failed":

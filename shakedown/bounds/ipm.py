@@ -42,7 +42,7 @@ APPROX_TOL = 1e-3
 STALL_ITERS = 4
 
 
-def ipm(A, b, e, *, tol=IPM_TOL, max_iter=80, stop=None):  # noqa: C901
+def ipm(A, b, e, *, tol=IPM_TOL, max_iter=80, stop=None, correctors=0):  # noqa: C901
     """Mehrotra predictor-corrector for ``max e.x s.t. A x + s = b, s >= 0`` (dense).
 
     Parameters
@@ -58,6 +58,13 @@ def ipm(A, b, e, *, tol=IPM_TOL, max_iter=80, stop=None):  # noqa: C901
         ``stop(x, s, z)``, asked at each iterate whose merit is at most :data:`APPROX_TOL`:
         ``True`` ends the loop with that iterate (the caller has what it needs, e.g. a Chebyshev
         centre certified by its own test; status as for the merit reached).
+    correctors : int
+        Gondzio's centrality correctors per iteration at most (:func:`_centrality`).  0 (plain
+        Mehrotra) for an LP whose answer is a vertex found by the crossover from a stalled
+        iterate: on a 2000-node FE strip (``bench_bounds_realizations.py --kind fe``, i = 4)
+        the corrected iterate stalled at another point, from which no basis was identified
+        (the crossover then spent 222 s in :func:`complete_basis`'s ``linprog``); 2 for the
+        Chebyshev centre, whose iterate is accepted by its own certificate (fewer iterations).
 
     Returns
     -------
@@ -116,7 +123,8 @@ def ipm(A, b, e, *, tol=IPM_TOL, max_iter=80, stop=None):  # noqa: C901
         mu_aff = float((s + ap * ds) @ (z + ad * dz)) / R
         sigma = (mu_aff / mu) ** 3 if mu > 0 else 0.0
         dx2, ds2, dz2 = _direction(A, solve, rd, rp, s, z, sigma * mu - ds * dz)
-        dx2, ds2, dz2 = _centrality(A, solve, s, z, sigma * mu, (dx2, ds2, dz2))
+        if correctors:
+            dx2, ds2, dz2 = _centrality(A, solve, s, z, sigma * mu, (dx2, ds2, dz2), correctors)
         ap, ad = 0.99 * _step(s, ds2), 0.99 * _step(z, dz2)
         x = x + ap * dx2
         s = s + ap * ds2
@@ -135,21 +143,23 @@ def ipm(A, b, e, *, tol=IPM_TOL, max_iter=80, stop=None):  # noqa: C901
     return x, s, z, status, it
 
 
-def _centrality(A, solve, s, z, target, direction):
-    """Gondzio's multiple centrality correctors: up to :data:`CORRECTORS` corrections of the
+def _centrality(A, solve, s, z, target, direction, correctors):
+    """Gondzio's multiple centrality correctors: up to ``correctors`` corrections of the
     predictor-corrector ``direction`` toward a point whose complementarity products
     ``s_i z_i`` lie in ``[BETA_MIN, BETA_MAX] * target``, each one solve with the factor at hand
     (no new normal matrix), kept while it lengthens the step by at least
     ``GAMMA * STEP_AIM``.
 
-    Issue 26 (a 2000-crack network's ``lam2`` LP, 4001 x 2001): without them the steps were
-    0.25-0.7 for 18 iterations (a few badly centred pairs block them), 30 iterations of
-    ~0.8 s.  Reference: J. Gondzio, Multiple centrality corrections in a primal-dual method for
-    linear programming, Computational Optimization and Applications 6 (1996) 137-156."""
+    Issue 26 (2000-crack networks, LPs of 4001 x 2001): without them the steps of the ``lam2``
+    LP were 0.25-0.7 for 18 iterations (a few badly centred pairs block them), 30 iterations of
+    ~0.8 s, 26 with them; the Chebyshev centre's LP 21 -> 18 iterations.  Used for the centre
+    only (see ``correctors`` in :func:`ipm`).  Reference: J. Gondzio, Multiple centrality
+    corrections in a primal-dual method for linear programming, Computational Optimization and
+    Applications 6 (1996) 137-156."""
     dx, ds, dz = direction
     ap, ad = _step(s, ds), _step(z, dz)
     zero = np.zeros(len(s))
-    for _ in range(CORRECTORS):
+    for _ in range(correctors):
         if min(ap, ad) >= 1.0:
             break
         ap_t, ad_t = min(1.0, ap + STEP_AIM), min(1.0, ad + STEP_AIM)
@@ -165,8 +175,6 @@ def _centrality(A, solve, s, z, target, direction):
     return dx, ds, dz
 
 
-#: Centrality correctors per iteration at most (:func:`_centrality`, Gondzio 1996).
-CORRECTORS = 2
 #: How much longer a step each corrector aims at, and the gain it must bring (a fraction).
 STEP_AIM, GAMMA = 0.2, 0.1
 #: The box of complementarity products the correctors aim at, relative to ``sigma mu``.

@@ -445,3 +445,26 @@ def test_tableau_builds_its_inverse_and_tableau_only_on_use():
     np.testing.assert_allclose(tab.W, np.linalg.solve(B.T, As.T), rtol=1e-10, atol=1e-12)
     np.testing.assert_allclose(tab.x0, np.linalg.solve(B, tab.b[:n]), rtol=1e-10, atol=1e-12)
     np.testing.assert_allclose(tab.act0, As @ tab.x0, rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_centrality_correctors_reach_the_same_optimum(seed):
+    """Gondzio's correctors (``ipm(..., correctors=2)``, the Chebyshev centre's setting, issue
+    26) change the path, not the answer: the same optimum as plain Mehrotra, certified by the
+    crossover, in no more iterations; ``solve_max`` uses none unless asked (the crossover of
+    a corrected, stalled iterate failed on a 2000-node FE strip)."""
+    from shakedown.bounds.ipm import ipm
+
+    rng = np.random.default_rng(100 + seed)
+    R, n = 160, 40
+    A = rng.standard_normal((R, n))
+    A /= np.linalg.norm(A, axis=1)[:, None]
+    b = rng.uniform(0.5, 2.0, R)
+    e = rng.standard_normal(n)
+    plain = ipm(A, b, e)
+    corr = ipm(A, b, e, correctors=2)
+    assert plain[3] == corr[3] == "converged"
+    assert corr[4] <= plain[4]
+    np.testing.assert_allclose(corr[0], plain[0], atol=1e-6)
+    ans, _ = dense_lp.solve_max(A, b, e, correctors=2)
+    assert ans.status == "optimal" and e @ ans.x == pytest.approx(highs_max(A, b, e), rel=1e-9)
