@@ -9,9 +9,10 @@ The realization is that of ``bench_bounds_realizations.py`` (``KIND N I``).  CPU
 (``time.process_time``) and call counts are collected around :class:`.BarycentricWalk`
 (``_pivot`` with the working-basis size ``m``, ``walk_to`` with its target, result and pivot
 count, ``_refactor``, ``_flush``), :class:`.BasisLP` (``solve``: row, pivot cap, status,
-pivots) and the pruning's steps (``screen``, ``exact_lps``, ``capped_lps``); printed as one
-JSON line (with the stages of the result), the raw records pickled to ``OUT.pkl``,
-``cProfile`` stats to ``OUT.prof`` with ``--cprofile``.  The counters add a few percent.
+pivots; ``race``: its rows, bound and answers) and the pruning's steps (``screen``,
+``exact_lps``, ``capped_lps``); printed as one JSON line (with the stages of the result), the
+raw records pickled to ``OUT.pkl``, ``cProfile`` stats to ``OUT.prof`` with ``--cprofile``.
+The counters add a few percent.
 """
 
 from __future__ import annotations
@@ -61,6 +62,27 @@ def instrument(log):
                               None if r is None or r.x is None else float(r.x[-1])))
     for name in ("screen", "exact_lps", "capped_lps"):
         _wrap(log, pr._Pruner, name, "pruning_" + name)
+    race = bl.BasisLP.race
+
+    def raced(self, rows, below=None, chunk=None):  # CPU of the race's own steps, its answers
+        spent, got = 0.0, []
+        steps = race(self, rows, below, chunk)
+        try:
+            while True:
+                t = time.process_time()
+                try:
+                    k, ans = next(steps)
+                except StopIteration:
+                    return
+                finally:
+                    spent += time.process_time() - t
+                got.append((k, None if ans is None else (ans.status, ans.iterations,
+                                                         None if ans.x is None else float(ans.x[-1]))))
+                yield k, ans
+        finally:
+            log["basis_lp_race"].append((spent, (len(rows), below, got)))
+
+    bl.BasisLP.race = raced
 
 
 def main():

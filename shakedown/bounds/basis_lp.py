@@ -29,12 +29,15 @@ import warnings
 import numpy as np
 import scipy.linalg as sla
 
+from ..model.errors import InputError
 from . import inverse_updates as iu
 from .certificates import CERT_TOL, DenseAnswer, kkt_residuals
 
 #: Primal feasibility tolerance (relative to the largest ``s*``) and pivot tolerance.
 FEAS_TOL = 1e-10
 PIV_TOL = 1e-9
+#: Pivots an LP of :meth:`BasisLP.race` goes on for before the dual bounds are compared again.
+RACE_CHUNK = 100
 
 
 class BasisLP:
@@ -103,11 +106,57 @@ class BasisLP:
         Status ``"failed"`` on a pivot cap (then ``x[-1]`` is the dual bound ``lam2 - c .
         sigma``, an upper bound of ``lam_high_k`` when no multiplier of the ``lam2`` basis was
         clipped), a vanishing pivot or an infeasible LP (``x`` is ``None``)."""
-        f = self.f
         kl = -1 if k is None else int(self.loc[k])
         if kl < 0 and k is not None:
             return None
-        y, c, mJ, K, KP, KT = f.y, self.cost, self.mJ, self.K, self.KP, self.KT
+        return _drive(self._steps(k, kl, max_pivots, self.KP, self.KT))
+
+    def race(self, rows, below: float | None = None, chunk: int | None = None):
+        """The exact answers of several rows side by side: yields ``(k, answer)`` (as
+        :meth:`solve`) in the order the LPs finish.
+
+        The LPs advance in turns of ``chunk`` pivots (:data:`RACE_CHUNK`), the one with the
+        fewest pivots next; an LP whose dual bound ``lam2 - c . sigma`` (an upper bound of its
+        ``lam_high`` while the costs are not clipped, falling with every pivot) drops below
+        ``below`` runs to its end before any other moves on.  So the first row with ``lam_high <
+        below`` to be seen is seen after about ``len(rows)`` times the pivots its bound needs to
+        cross ``below``, not after every LP before it in ``rows`` (issue 26, a 2000-crack
+        network: the batch's row below the incumbent was the last of 8, 2.1e4 pivots later).
+        A caller that has what it needs stops iterating; the LPs left are dropped.  Without a
+        row below ``below`` every LP runs to its end, as one after the other.  The answers are
+        those of :meth:`solve`, pivot for pivot (each LP has its own working arrays).
+        """
+        chunk = RACE_CHUNK if chunk is None else chunk
+        if not isinstance(chunk, (int, np.integer)) or chunk < 1:
+            raise InputError(f"race: chunk = {chunk!r} pivots; give a positive integer")
+        runs = []  # [dual bound, pivots, k, steps]
+        for k in rows:
+            k = int(k)
+            kl = int(self.loc[k])
+            if kl < 0:
+                yield k, None
+                continue
+            KP = np.empty((len(self.rows), self.n + 2), order="F")  # its own (pages touched
+            KT = np.empty((self.n + 2, self.n + 1))  # as the working basis grows)
+            runs.append([self.f.lam2, 0, k, self._steps(k, kl, None, KP, KT)])
+        while runs:
+            hot = [i for i, r in enumerate(runs) if below is not None and r[0] < below]
+            i = hot[0] if hot else min(range(len(runs)), key=lambda i: runs[i][1])
+            run = runs[i]
+            try:
+                for _ in range(chunk):
+                    run[0] = next(run[3])
+                    run[1] += 1
+            except StopIteration as done:
+                runs.pop(i)
+                yield run[2], done.value
+
+    def _steps(self, k, kl, max_pivots, KP, KT):
+        """The dual simplex of :meth:`solve` as a generator: yields the dual bound ``lam2 - c .
+        sigma`` after each pivot, returns the answer (``StopIteration.value``).  ``KP``,
+        ``KT``: its working arrays (``K`` at the basic coordinates, at the tight rows)."""
+        f = self.f
+        y, c, mJ, K = f.y, self.cost, self.mJ, self.K
         cap = max_pivots if max_pivots is not None else 4 * self.n + 100
         P, T = [], []
         W = np.zeros((0, 0))
@@ -119,6 +168,8 @@ class BasisLP:
                 if W is None:
                     return self._failed(it)
             sP = W @ self.star[T] if m else np.zeros(0)
+            if it:
+                yield f.lam2 - (float(c[P] @ sP) if m else 0.0)
             ys = float(y[P] @ sP) if m else 0.0
             sJ = self.star - (KP[:, :m] @ sP if m else 0.0) - mJ * ys
             sJ[T] = 0.0
@@ -134,7 +185,7 @@ class BasisLP:
                 worst = min(sJ[i], sP[r] if m else np.inf)
                 if worst >= -self.tol:  # optimal (for the clipped costs: finish on y)
                     if self.clipped:
-                        W, it = self._primal_finish(kl, P, T, W, it, cap)
+                        W, it = self._primal_finish(kl, P, T, W, it, cap, KP, KT)
                         if W is None:
                             return self._failed(it)
                     return self._answer(k, P, T, W, it)
@@ -172,15 +223,14 @@ class BasisLP:
             ic = int(np.argmax(ec))
             is_ = int(np.argmax(es)) if m else -1
             enter = ("coord", ic) if m == 0 or ec[ic] >= es[is_] else ("slack", is_)
-            W = self._update(W, P, T, kind, q, enter, rowq if kind == "row" else None)
+            W = self._update(W, P, T, kind, q, enter, rowq if kind == "row" else None, KP, KT)
             if W is None:
                 return self._failed(it)
             it += 1
             since += 1
 
-    def _update(self, W, P, T, kind, q, enter, rowq):
+    def _update(self, W, P, T, kind, q, enter, rowq, KP, KT):
         K, mJ, y = self.K, self.mJ, self.f.y
-        KP, KT = self.KP, self.KT
         m = len(P)
         e = enter[1]
         if kind == "row" and enter[0] == "coord":  # row q tight, coordinate e basic: border
@@ -218,12 +268,12 @@ class BasisLP:
     def _failed(self, it):
         return DenseAnswer("failed", None, None, np.zeros(0, int), it, (np.inf,) * 4)
 
-    def _primal_finish(self, kl, P, T, W, it, cap):
+    def _primal_finish(self, kl, P, T, W, it, cap, KP, KT):
         """Primal simplex pivots on the true costs ``y`` from a primal feasible basis (optimal
         for the clipped costs): entering, a coordinate or a tight row's slack (never row
         ``kl``'s) of negative reduced cost.  Returns ``(W, pivots)``; ``W`` is ``None`` on a
         cap or an unbounded direction."""
-        y, mJ, KP, KT = self.f.y, self.mJ, self.KP, self.KT
+        y, mJ = self.f.y, self.mJ
         while True:
             m = len(P)
             z = -(W.T @ y[P]) if m else np.zeros(0)
@@ -268,7 +318,7 @@ class BasisLP:
             else:
                 kind, q = "row", is_
                 rowq = self.K[q, P] + mJ[q] * y[P]
-            W = self._update(W, P, T, kind, q, enter, rowq)
+            W = self._update(W, P, T, kind, q, enter, rowq, KP, KT)
             it += 1
             if W is None:
                 return None, it
@@ -296,6 +346,15 @@ class BasisLP:
         if max(res) > CERT_TOL:  # not certified: the caller solves it another way
             return DenseAnswer("failed", x, Y, basis, it, (np.nan,) * 4)
         return DenseAnswer("optimal", x, Y, basis, it, res)
+
+
+def _drive(steps):
+    """Run a generator of :meth:`BasisLP._steps` to its end; its answer."""
+    while True:
+        try:
+            next(steps)
+        except StopIteration as done:
+            return done.value
 
 
 def separation_lp(frame, cs):

@@ -26,7 +26,9 @@ driver :func:`lam_high_pruned`:
    :data:`BATCH`: a value below ``t`` is that row's exact ``lam_high`` (the cap is not binding)
    and lowers the incumbent (the walk restarts from that optimum's vertex); a binding cap proves
    ``lam_high >= t``.  The first value below ``t`` ends the batch: the rows still running are
-   decided again at the new incumbent (seed 2, N = 1000: two of them stall at ``lam = t``).
+   decided again at the new incumbent (seed 2, N = 1000: two of them stall at ``lam = t``); in
+   the coordinates below the batch's LPs run side by side, a row proven below ``t`` by its dual
+   bound first (:meth:`~.basis_lp.BasisLP.race`).
    An LP that fails while ``t`` stands is solved from the ``lam2`` basis, then by HiGHS.
 
 Every optimum of step 1 and 3 also proves ``lam_high_j >= value`` for each row ``j`` tight at
@@ -135,24 +137,24 @@ class _Pruner:
             self.best = (val, k if k is not None else int(T[0]), ans)
         return True
 
-    def basis_lps(self, rows, stop=None):
+    def basis_lps(self, rows, below=None):
         """Exact "max lam" LPs in the coordinates of the lam2 basis (:mod:`.basis_lp`); returns
-        the rows it could not decide (no frame, or an answer not certified) or did not start
-        (``stop()`` true after an answer)."""
+        the rows it could not decide (no frame, or an answer not certified) or did not finish.
+        ``below``: the LPs run side by side (:meth:`.BasisLP.race`) and stop at the first answer
+        below ``below`` (the rows left are decided again at that incumbent)."""
         if not self.simplex():
             return [int(k) for k in rows]
         self.lp = self.lp or BasisLP(self.frame, self.tab)
-        left = []
-        for i, k in enumerate(rows):
-            k = int(k)
-            if stop is not None and stop():
-                return left + [int(j) for j in rows[i:]]
-            if self.exact[k]:
-                continue
-            ans = self.lp.solve(k)
+        rows = [int(k) for k in rows if not self.exact[k]]
+        answers = ((k, self.lp.solve(k)) for k in rows) if below is None else self.lp.race(rows, below)
+        left, done = [], set()
+        for k, ans in answers:
+            done.add(k)
             if ans is None or not self.take(k, ans):
                 left.append(k)
-        return left
+            if below is not None and self.best[0] < below:
+                break
+        return left + [k for k in rows if k not in done]
 
     def exact_lps(self, rows):
         """Exact "max lam" LPs: in the coordinates of the lam2 basis, else from the lam2 basis
@@ -264,7 +266,7 @@ class _Pruner:
         it applies, else with ``lam <= t`` from the walk's vertex.  A value below ``t`` ends
         the batch: the rows left are decided again at the new, lower incumbent (most by walks
         there), not by long LPs at ``t``."""
-        rows = self.basis_lps(rows, stop=lambda: self.best[0] < t)
+        rows = self.basis_lps(rows, below=t)
         if self.best[0] < t:
             return rows
         if not rows:

@@ -18,6 +18,7 @@ from test_bounds import _uncoupled, check_certificate, random_problem
 import crack_networks as cn
 import shakedown as sd
 from shakedown.bounds import facet_walk, pruning
+from shakedown.bounds.basis_lp import BasisLP
 from shakedown.bounds.facet_walk import FacetWalk, certified_rows
 
 SAME = 1e-9
@@ -304,8 +305,8 @@ def test_capped_batches_stopped_by_a_lower_incumbent(n, seed, coords, monkeypatc
     lowers the incumbent ends its batch, and the rows still running are decided again at the
     new incumbent (not by exact LPs at the old one).  lam1 and every exact lam_high stay those
     of the full computation.  ``coords="v"``: the LPs in ``v``, without the coordinates of the
-    lam2 basis, as where they do not apply; ``"lam2 basis"``: the exact LPs in them, one by one
-    (issue 26: they too stop at the first value below the incumbent)."""
+    lam2 basis, as where they do not apply; ``"lam2 basis"``: the exact LPs in them, side by side
+    (:meth:`.BasisLP.race`, issue 26: they too stop at the first value below the incumbent)."""
     if coords == "v":
         monkeypatch.setattr(pruning._Pruner, "simplex", lambda self: None)
     monkeypatch.setattr(pruning, "INIT_LPS", 1)
@@ -323,6 +324,14 @@ def test_capped_batches_stopped_by_a_lower_incumbent(n, seed, coords, monkeypatc
         return failed
 
     monkeypatch.setattr(pruning._Pruner, "capped_lps", capped_lps)
+    races = []
+    race = BasisLP.race
+
+    def spy(self, rows, below=None, chunk=None):  # turns of 1 pivot: these LPs are short
+        races.append((len(rows), below))
+        return race(self, rows, below, chunk=1)
+
+    monkeypatch.setattr(BasisLP, "race", spy)
     cracks = cn.sample_crack_set(n, density=0.1, half_length=1.0, min_spacing=0.1,
                                  rng=np.random.default_rng(seed))
     model = cn.kachanov_model(cracks, shear_modulus=1.0, poisson_ratio=0.25, friction=0.6)
@@ -330,3 +339,7 @@ def test_capped_batches_stopped_by_a_lower_incumbent(n, seed, coords, monkeypatc
     fast, _ = assert_fast_matches_full(model.system, load)
     assert stopped  # some batches were cut short
     assert not fast.lam_high_exact.all()
+    # in the lam2-basis coordinates the batches race (BasisLP.race) below the incumbent
+    assert (coords == "v") == (not races)
+    assert all(below is not None for _, below in races)
+    assert coords == "v" or max(len_ for len_, _ in races) > 1

@@ -1,0 +1,107 @@
+"""Several exact "max lam" LPs side by side (:meth:`.BasisLP.race`, issue 26).
+
+The race must give every row the answer :meth:`.BasisLP.solve` gives (pivot for pivot: the same
+iterations and the same vectors, bit for bit), in any schedule; a row whose dual bound has
+dropped below ``below`` must be finished before any other LP moves on; and a row below
+``below`` placed last in the batch must be found after fewer pivots than by solving the rows one
+after the other.  Inside the pruning (the capped batches go through it and lam1 stays exact):
+``test_pruning.py::test_capped_batches_stopped_by_a_lower_incumbent``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from test_basis_lp import _setup
+from test_bounds import random_problem
+from test_single_simplex import _kachanov
+
+from shakedown.bounds.basis_lp import BasisLP
+from shakedown.model.errors import InputError
+
+
+def _frame(case):
+    if case.startswith("random"):
+        system, load = random_problem(int(case[6:]), 1)
+    elif case.startswith("dup"):
+        system, load = random_problem(20, 2)
+    else:
+        system, load = _kachanov(int(case[8:]), 2)
+    return _setup(system, load, dup=case.startswith("dup"))
+
+
+def _same(a, b):
+    if a is None or b is None:
+        return a is None and b is None
+    return (a.status == b.status and a.iterations == b.iterations
+            and all(np.array_equal(u, v, equal_nan=True) for u, v in
+                    ((a.x, b.x), (a.y, b.y), (a.basis, b.basis), (a.residuals, b.residuals))))
+
+
+@pytest.mark.parametrize("case", ["random40", "dup20", "kachanov60"])
+@pytest.mark.parametrize("chunk", [1, 7])
+def test_race_gives_the_answers_of_solve(case, chunk):
+    """Every row once, each with :meth:`solve`'s answer bit for bit, whether or not a bound
+    below which LPs are finished first is given (``dup20``: every row twice, every vertex
+    degenerate; rows of the lam2 basis give ``None`` as in :meth:`solve`)."""
+    f, tab, main = _frame(case)
+    lp = BasisLP(f, tab)
+    rows = [int(k) for k in f.J[:24]] + [int(f.B[0])]
+    alone = {k: lp.solve(k) for k in rows}
+    lams = sorted(a.x[-1] for a in alone.values() if a is not None and a.status == "optimal")
+    for below in (None, lams[len(lams) // 2]):
+        seen = list(lp.race(rows, below=below, chunk=chunk))
+        assert sorted(k for k, _ in seen) == sorted(rows)
+        assert all(_same(a, alone[k]) for k, a in seen)
+        assert dict(seen)[int(f.B[0])] is None
+
+
+def _spy(monkeypatch):
+    """Log of every pivot of every LP: ``(row, dual bound after it)``."""
+    log = []
+    orig = BasisLP._steps
+
+    def steps(self, k, *args):
+        g = orig(self, k, *args)
+        while True:
+            try:
+                bound = next(g)
+            except StopIteration as done:
+                return done.value
+            log.append((k, bound))
+            yield bound
+
+    monkeypatch.setattr(BasisLP, "_steps", steps)
+    return log
+
+
+@pytest.mark.parametrize("n,seed,among", [(120, 2, 40), pytest.param(200, 3, 200, marks=pytest.mark.slow)])
+def test_a_row_below_the_bound_is_found_first(n, seed, among, monkeypatch):
+    """The 8 rows of least ``lam_high`` (among the first ``among`` rows outside the lam2 basis)
+    of a crack network, the least last and ``below`` between it and the others: the race (turns
+    of 5 pivots: these LPs are short) yields that row's answer as the first below ``below``;
+    once its dual bound is below ``below`` no other LP moves; and it takes fewer pivots in all
+    than the rows one after the other up to it."""
+    f, tab, main = _setup(*_kachanov(n, seed))
+    lp = BasisLP(f, tab)
+    alone = {int(k): lp.solve(int(k)) for k in f.J[:among]}
+    lam = {k: a.x[-1] for k, a in alone.items() if a is not None and a.status == "optimal"}
+    rows = sorted(lam, key=lambda k: -lam[k])[-8:]
+    low = rows[-1]
+    below = 0.5 * (lam[low] + lam[rows[-2]])
+    sequential = sum(alone[k].iterations for k in rows)
+    log = _spy(monkeypatch)
+    first = next((k, a) for k, a in lp.race(rows, below=below, chunk=5) if a.x[-1] < below)
+    assert first[0] == low and _same(first[1], alone[low])
+    cross = next(i for i, (k, b) in enumerate(log) if b < below)
+    assert log[cross][0] == low
+    assert {k for k, _ in log[cross:]} == {low}  # nothing else moved after the crossing
+    assert sum(1 for k, _ in log if k == low) == alone[low].iterations
+    assert len(log) < sequential
+
+
+@pytest.mark.parametrize("chunk", [0, -3, 2.5, "10"])
+def test_race_rejects_a_bad_chunk(chunk):
+    f, tab, main = _frame("random40")
+    with pytest.raises(InputError, match="chunk"):
+        next(BasisLP(f, tab).race([int(f.J[0])], chunk=chunk))
