@@ -84,18 +84,11 @@ class Tableau:
         return self.Binv.T @ self.A.T
 
     @functools.cached_property
-    def x0(self):
-        """The basic solution, shape (n,)."""
+    def x0(self):  # the basic solution, shape (n,); act0 = A x0, shape (R,)
         return sla.lu_solve(self._lu, self.b[self.T0], check_finite=False)
 
-    @functools.cached_property
-    def act0(self):
-        """``A x0``, shape (R,)."""
-        return self.A @ self.x0
-
-    @functools.cached_property
-    def scale_x(self):
-        return max(float(np.abs(self.x0).max(initial=0.0)), 1.0)
+    act0 = functools.cached_property(lambda self: self.A @ self.x0)
+    scale_x = functools.cached_property(lambda self: max(float(np.abs(self.x0).max()), 1.0))
 
     @property
     def dual_feasible(self) -> bool:
