@@ -27,6 +27,9 @@ __all__ = ["CrackSet", "segment_distance", "load_csv", "save_csv", "KachanovAccu
 #: built from exact data leaves a distance of ~5e-17 a after rounding; a physical gap of 1e-9 a
 #: is already far inside the range where no crack-interaction model is meaningful.
 TOUCH_RTOL = 1e-9
+#: Largest coordinate or half-length accepted: the neighbour search squares distances (a k-d
+#: tree of centres at 1.3e154 overflowed with a bare ``ValueError``, found by the fuzz test).
+MAX_LENGTH = 1e150
 
 #: Kachanov's method is inaccurate for close pairs: for two collinear cracks its mean opening is
 #: 0.7 % too large at a gap of 0.5 a, 2.7 % at 0.1 a, 3.7 % at 0.05 a against the exact
@@ -133,6 +136,11 @@ class CrackSet:
                 f"half_lengths must be > 0; crack {k} has half_length {a[k]!r} "
                 "(remove zero-length cracks)"
             )
+        big = max(float(np.abs(c).max()), float(a.max()))
+        if big > MAX_LENGTH:
+            raise InputError(
+                f"centres and half_lengths must be at most {MAX_LENGTH:g} in magnitude (squared "
+                f"distances must stay finite); got {big:.3g}: give them in other length units")
         for arr in (c, a, ang):
             arr.setflags(write=False)
         object.__setattr__(self, "centres", c)

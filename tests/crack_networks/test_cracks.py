@@ -194,3 +194,13 @@ def test_plotting_runs_and_returns_axes():
     assert cs.plot(ax=ax) is ax
     ax2 = plot_collinear_accuracy([0.1, 1.0], [1.2, 1.07], {"k": [1.25, 1.08]})
     assert len(ax2.lines) == 1
+
+
+@pytest.mark.parametrize("centres,half", [([[0.0, 0.0], [1.3e154, 1.3e154]], [1.0, 1.0]),
+                                          ([[0.0, 0.0], [1e151, 0.0]], [1.0, 2e150])])
+def test_lengths_whose_squares_overflow_are_refused_by_name(centres, half):
+    """The fuzz test's example: centres at 1.3e154 overflowed the k-d tree's squared distances
+    (a bare scipy ``ValueError``); now an ``InputError`` naming the fields and the fix."""
+    with pytest.raises(InputError, match="centres and half_lengths .* other length units"):
+        cn.CrackSet(centres, half, [0.0, 0.0])
+    cn.CrackSet(np.asarray(centres) * 1e-10, np.asarray(half) * 1e-10, [0.0, 0.0])
