@@ -100,6 +100,15 @@ def test_condensed_fe_strip_takes_the_dense_path(monkeypatch):
     assert cs.c @ y / (-(cs.m @ y)) == pytest.approx(b.lam2, rel=1e-8)
 
 
+def _centre_at_half_lam2(n, seed):
+    """A random problem's constraint set, ``lam = lam2 / 2`` and HiGHS's Chebyshev radius there."""
+    system, load = random_problem(n, seed)
+    cs = sd.bounds.extreme_constraints(system, load)
+    lam = 0.5 * sd.shakedown_bounds(system, load, only=("lam2",)).lam2
+    _, r_h = sd.bounds.chebyshev_centre(cs, lam, solver="highs")
+    return cs, lam, r_h
+
+
 @pytest.mark.parametrize("n,seed", [(30, 5), (80, 6)])
 def test_the_certified_interior_centre_needs_no_crossover(n, seed, monkeypatch):
     """Issue 26: on a 2000-crack network (``rng=77``) the centre LP's crossover completed a
@@ -107,10 +116,7 @@ def test_the_certified_interior_centre_needs_no_crossover(n, seed, monkeypatch):
     bounds were done.  The interior point's centre is now tried first: no crossover when its
     multipliers certify it, and the radius is HiGHS's.  Where it is refused, the crossover runs
     as before (and the centre is a vertex, again HiGHS's radius)."""
-    system, load = random_problem(n, seed)
-    cs = sd.bounds.extreme_constraints(system, load)
-    lam = 0.5 * sd.shakedown_bounds(system, load, only=("lam2",)).lam2
-    _, r_h = sd.bounds.chebyshev_centre(cs, lam, solver="highs")
+    cs, lam, r_h = _centre_at_half_lam2(n, seed)
     calls = []
     real = dense_lp._crossover
 
@@ -135,10 +141,7 @@ def test_the_interior_point_stops_once_its_centre_is_proven(n, seed, monkeypatch
     26 iterations of ~0.8 s were saved), not at full convergence.  The radius is HiGHS's to
     ``CENTRE_EARLY`` and the ball inside ``H``; a looser ``CENTRE_EARLY`` stops earlier than
     none at all."""
-    system, load = random_problem(n, seed)
-    cs = sd.bounds.extreme_constraints(system, load)
-    lam = 0.5 * sd.shakedown_bounds(system, load, only=("lam2",)).lam2
-    _, r_h = sd.bounds.chebyshev_centre(cs, lam, solver="highs")
+    cs, lam, r_h = _centre_at_half_lam2(n, seed)
     iters = []
     real = dense_lp.ipm
 
