@@ -257,6 +257,20 @@ def _independent_rows(A, order, n, rtol=1e-9, floor=0.0, block=64):
     return None
 
 
+def strongly_active(z, s, n, max_missing=None):
+    """The strongly active rows at an interior-point iterate (sorted): the rows whose ``z / s``
+    lie above the largest relative gap among the ``n + 1`` largest values (at least
+    ``n - max_missing`` of them when ``max_missing`` is given).  :func:`complete_basis`
+    completes them to a basis; ``n`` minus their number is the size of its completion LP."""
+    r = z / np.maximum(s, 1e-300)
+    order = np.argsort(-r, kind="stable")
+    top = np.maximum(r[order[: n + 1]], 1e-300)
+    lo = 1 if max_missing is None else max(1, n - max_missing)
+    gaps = np.log(top[lo - 1 : n]) - np.log(top[lo : n + 1])
+    m = lo + int(np.argmax(gaps))  # the cut with the largest relative drop
+    return np.sort(order[:m])
+
+
 def complete_basis(A, z, s, e, n, max_missing=None):
     """A dual-feasible basis at a degenerate interior-point optimum.
 
@@ -270,13 +284,8 @@ def complete_basis(A, z, s, e, n, max_missing=None):
     """
     from scipy.optimize import linprog
 
-    r = z / np.maximum(s, 1e-300)
-    order = np.argsort(-r, kind="stable")
-    top = np.maximum(r[order[: n + 1]], 1e-300)
-    lo = 1 if max_missing is None else max(1, n - max_missing)
-    gaps = np.log(top[lo - 1 : n]) - np.log(top[lo : n + 1])
-    m = lo + int(np.argmax(gaps))  # |C|: the cut with the largest relative drop
-    C = np.sort(order[:m])
+    C = strongly_active(z, s, n, max_missing)
+    m = len(C)
     k = n - m
     if k <= 0:
         return None

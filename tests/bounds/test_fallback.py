@@ -324,3 +324,43 @@ def test_the_verdict_names_a_costly_fallback_in_any_stage(stage):
     assert f"1 LP(s) (1 {stage}) could not be certified" in text and "6 s of the 11 s" in text
     cheap = others + (_record(stage, 1, 7.0, 5.0),)  # 5 s against 6 s for the rest
     assert "HiGHS" not in dataclasses.replace(b, stages=cheap, solve_time=11.0).verdict()
+
+
+@pytest.mark.parametrize("limit", [0, 100])
+def test_a_large_completion_lp_is_not_tried_first(monkeypatch, limit):
+    """Issue 26 (2000-crack network i = 9): at a stalled interior point with 4 strongly active
+    rows of 2001, completing them to a basis is a 1997-row dense LP (93 s), while the basis the
+    interior point names reaches the certified optimum in 4.9 s (:func:`finish_from`).  Above
+    ``COMPLETION_LP_MAX`` missing rows the crossover finishes the named basis first; below, the
+    completion comes first, as before.  Either way the answer is HiGHS's optimum."""
+    A, b, e = random_lp(8, 30, 11)
+    n = A.shape[1]
+    rng = np.random.default_rng(11)
+    for _ in range(200):  # a named basis neither primal nor dual feasible
+        T = np.sort(rng.choice(len(b), n, replace=False))
+        tab = dense_lp.Tableau(A, b, e, T)
+        if not tab.singular and not tab.dual_feasible and np.any(tab.act0 > tab.b + 1e-6):
+            break
+    else:
+        pytest.fail("no wrong start basis drawn")
+    # an iterate that names T, with one strongly active row (n - 1 rows missing)
+    s = np.ones(len(b))
+    z = np.full(len(b), 1e-6)
+    z[T] = 1.0
+    z[T[0]] = 1e8
+    As = A / np.linalg.norm(A, axis=1)[:, None]
+    assert len(dense_lp.strongly_active(z, s, n)) == 1
+    calls = []
+    for name in ("finish_from", "complete_basis"):
+        real = getattr(dense_lp, name)
+        monkeypatch.setattr(dense_lp, name,
+                            lambda *a, _r=real, _n=name, **k: (calls.append(_n), _r(*a, **k))[1])
+    monkeypatch.setattr(dense_lp, "COMPLETION_LP_MAX", limit)
+    ans, out = dense_lp._crossover(A, b, e, T, As, s, z, 0)
+    assert ans is not None and ans.status == "optimal" and out.dual_feasible
+    assert e @ ans.x == pytest.approx(highs_max(A, b, e), rel=1e-9)
+    assert max(dense_lp.kkt_residuals(A, b, e, ans.x, ans.y)) <= dense_lp.CERT_TOL
+    if limit < n - 1:
+        assert calls == ["finish_from"]
+    else:
+        assert calls[0] == "complete_basis"
