@@ -58,6 +58,7 @@ class BasisLP:
 
     def __init__(self, frame, tab, extra=None):
         self.f, self.tab = frame, tab
+        self.dropped = 0  # pivots of the LPs a race dropped unfinished
         f = frame
         self.n = f.n
         rows, K, mr = f.J, f.K, f.m[f.J]
@@ -139,17 +140,20 @@ class BasisLP:
             KP = np.empty((len(self.rows), self.n + 2), order="F")  # its own (pages touched
             KT = np.empty((self.n + 2, self.n + 1))  # as the working basis grows)
             runs.append([self.f.lam2, 0, k, self._steps(k, kl, None, KP, KT)])
-        while runs:
-            hot = [i for i, r in enumerate(runs) if below is not None and r[0] < below]
-            i = hot[0] if hot else min(range(len(runs)), key=lambda i: runs[i][1])
-            run = runs[i]
-            try:
-                for _ in range(chunk):
-                    run[0] = next(run[3])
-                    run[1] += 1
-            except StopIteration as done:
-                runs.pop(i)
-                yield run[2], done.value
+        try:
+            while runs:
+                hot = [i for i, r in enumerate(runs) if below is not None and r[0] < below]
+                i = hot[0] if hot else min(range(len(runs)), key=lambda i: runs[i][1])
+                run = runs[i]
+                try:
+                    for _ in range(chunk):
+                        run[0] = next(run[3])
+                        run[1] += 1
+                except StopIteration as done:
+                    runs.pop(i)
+                    yield run[2], done.value
+        finally:  # (the caller stopped iterating: the LPs left are dropped)
+            self.dropped += sum(r[1] for r in runs)
 
     def _steps(self, k, kl, max_pivots, KP, KT):
         """The dual simplex of :meth:`solve` as a generator: yields the dual bound ``lam2 - c .

@@ -21,14 +21,13 @@ driver :func:`lam_high_pruned`:
    time towards the not yet decided row of least slack; every
    certified vertex proves ``lam_high >= t`` for all its tight rows;
 3. a row the walk cannot reach (face empty at ``t``, or undecided after :data:`WALK_CAP`
-   pivots) gets an exact LP, ``max lam`` with the row tight and ``lam <= t`` (dual simplex from
-   the walk's vertex plus the row ``lam <= t``: dual feasible there), in batches of
-   :data:`BATCH`: a value below ``t`` is that row's exact ``lam_high`` (the cap is not binding)
-   and lowers the incumbent (the walk restarts from that optimum's vertex); a binding cap proves
-   ``lam_high >= t``.  The first value below ``t`` ends the batch: the rows still running are
-   decided again at the new incumbent (seed 2, N = 1000: two of them stall at ``lam = t``); in
-   the coordinates below the batch's LPs run side by side, a row proven below ``t`` by its dual
-   bound first (:meth:`~.basis_lp.BasisLP.race`).
+   pivots), or that the walks would decide for more pivots than the LPs
+   (:class:`~.walk_budget.WalkBudget`), gets an exact LP, ``max lam`` with the row tight (with
+   ``lam <= t`` in ``v``: dual simplex from the walk's vertex), in batches of :data:`BATCH`: a
+   value below ``t`` is that row's exact ``lam_high`` and lowers the incumbent (the walk
+   restarts from that optimum's vertex, the rows still running are decided again there); a
+   binding cap proves ``lam_high >= t``.  In the coordinates below the batch's LPs run side by
+   side, a row proven below ``t`` by its dual bound first (:meth:`~.basis_lp.BasisLP.race`).
    An LP that fails while ``t`` stands is solved from the ``lam2`` basis, then by HiGHS.
 
 Every optimum of step 1 and 3 also proves ``lam_high_j >= value`` for each row ``j`` tight at
@@ -56,11 +55,10 @@ from .basis_lp import BasisLP
 from .facet_walk import FacetWalk, certified_rows, vertex_rows
 from .outcome import value
 from .single_simplex import single_dual_simplex
+from .walk_budget import WalkBudget
 
-#: Exact "max lam" LPs solved first (rows of largest slack at the lam2 optimum).
-INIT_LPS = 1
-#: Further screened candidates the walk visits first (before the rows of least slack).
-PRIORITY = 8
+#: Exact "max lam" LPs solved first, and further screened candidates the walk visits first.
+INIT_LPS, PRIORITY = 1, 8
 #: Rows (of largest ``m``) whose "max lam" LPs are screened by a few dual simplex pivots
 #: (problems of at least :data:`SCREEN_MIN_N` nodes; smaller ones solve the
 #: :data:`UNSCREENED_LPS` rows of largest slack at the ``lam2`` optimum exactly, as before).
@@ -71,19 +69,16 @@ UNSCREENED_LPS = 16
 #: previous round (the first: :data:`SCREEN_ROWS`) get ``pivots`` dual simplex pivots each.
 SCREEN_ROUNDS = ((None, 10), (48, 40), (12, 160))
 #: At most this many LPs of at least :data:`SINGLE_MIN_N` unknowns are solved one by one with
-#: an explicit basis inverse instead of the batched dual simplex.  One: the pool amortises its
-#: pricing over several LPs (N = 2000, seed 2: 8 capped LPs of ~4000 pivots took 327 s one by
-#: one against 122 s pooled at 8176575), a lone long LP is faster alone (14 s against 18 s).
+#: an explicit basis inverse instead of the batched dual simplex (N = 2000, seed 2: 8 capped
+#: LPs of ~4000 pivots 327 s one by one, 122 s pooled; a lone long LP 14 s against 18 s).
 SINGLE_MAX = 1
 SINGLE_MIN_N = 200
-#: Smallest problem whose screen runs its partial LPs one by one in the coordinates of the lam2
-#: basis (:mod:`.basis_lp`); below, the batched dual simplex in ``v`` is cheaper (N = 500:
-#: 0.63 s against 0.2 s for the 400 + 48 + 12 partial LPs).
+#: Smallest problem whose screen runs its partial LPs in the coordinates of the lam2 basis
+#: (:mod:`.basis_lp`); below, the batch in ``v`` is cheaper (N = 500: 0.63 s against 0.2 s).
 SCREEN_BASIS_MIN_N = 800
-#: Pivots a walk may spend on one target before it goes to an exact LP.
-WALK_CAP = 60
-#: Pivots a walk may go on with when the first ``WALK_CAP`` did not decide.
-LONG_WALK_CAP = 400
+#: Pivots a walk may spend on one target before it goes to an exact LP, and go on with (where
+#: :class:`~.walk_budget.WalkBudget` says it is worth it) when these did not decide.
+WALK_CAP, LONG_WALK_CAP = 60, 400
 #: Undecided rows solved together by capped LPs.
 BATCH = 8
 #: Breakpoints a parametric descent may pass before its row goes to an exact LP.
@@ -107,6 +102,7 @@ class _Pruner:
         self.main, self.cs = main, cs
         self.frame = frame  # the coordinates of the lam2 basis (False: built on first use)
         self.lp = None  # its exact LPs (BasisLP)
+        self.budget = WalkBudget()  # walk or LP (issue 26)
 
     # ---------------------------------------------------------------- answers
     def take(self, k, ans, lam2_answer=False, cap=None):
@@ -246,6 +242,23 @@ class _Pruner:
         walk = BarycentricWalk(self.frame, t, T)
         return walk if walk.ok else None
 
+    def walk_to(self, walk, k, cap, kind, t):
+        """``walk.walk_to(k, cap)``, counted in the budget (``kind``: "short" or "long")."""
+        before, pivots = self.decided(walk, t), walk.pivots
+        res = walk.walk_to(k, cap)
+        self.budget.walked(kind, walk.pivots - pivots, self.decided(walk, t) - before)
+        return res
+
+    def decided(self, walk, t):
+        """Rows decided at ``t``: exact, proven ``lam_high >= t``, or reached by ``walk``."""
+        done = self.exact | (self.lower >= t) | walk.covered
+        unchecked = getattr(walk, "unchecked", None)
+        return int(np.count_nonzero(done if unchecked is None else done | unchecked))
+
+    def lp_pivots(self):
+        """LP pivots so far (those of LPs a race dropped unfinished too)."""
+        return self.book.iters + (self.lp.dropped if self.lp else 0)
+
     def settle(self, walk, t):
         """Check the vertices of ``walk`` not yet checked (a :class:`.BarycentricWalk`'s
         batch) and credit the rows tight at its checked vertices (``lam_high >= t``)."""
@@ -328,15 +341,18 @@ class _Pruner:
                 if left.size and len(pending) < BATCH:
                     first = [j for j in priority if todo[j]]
                     k = first[0] if first else int(left[np.argmin(walk.s[left])])
-                    res = walk.walk_to(k, WALK_CAP)
+                    if not self.budget.worth("short"):  # the LPs decide rows for less
+                        pending.append(k)
+                        continue
+                    res = self.walk_to(walk, k, WALK_CAP, "short", t)
                     if res is None and walk.broken and isinstance(walk, BarycentricWalk):
                         walk = self.to_v(walk, t)  # too many tight rows: go on in v
                         if walk is None:
                             pending.append(k)
                             break
-                        res = walk.walk_to(k, WALK_CAP)
-                    if res is None and not walk.broken:  # undecided: go on to a decision
-                        res = walk.walk_to(k, LONG_WALK_CAP)
+                        res = self.walk_to(walk, k, WALK_CAP, "short", t)
+                    if res is None and not walk.broken and self.budget.worth("long"):
+                        res = self.walk_to(walk, k, LONG_WALK_CAP, "long", t)  # on to a decision
                     if res is UNCHECKED:
                         continue
                     if res is False and isinstance(walk, BarycentricWalk):
@@ -368,11 +384,13 @@ class _Pruner:
             if walk is None:  # reopen at the incumbent's optimum, then decide the rest
                 self.exact_lps(pending)
                 continue
+            before, pivots = self.decided(walk, t), self.lp_pivots()
             failed = self.capped_lps(walk, t, pending)
+            if self.best[0] >= t:
+                self.exact_lps(failed)
+            self.budget.solved(self.lp_pivots() - pivots, self.decided(walk, t) - before)
             if self.best[0] < t:  # lower incumbent: the failed rows are decided at it
                 walk = None
-            else:
-                self.exact_lps(failed)
 
 
 def _solve(tab, rows, on_answer, skip, max_pivots=None, stop=None):
