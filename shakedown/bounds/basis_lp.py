@@ -5,13 +5,12 @@ In the slack coordinates ``sigma`` of the ``lam2`` basis rows (:mod:`.barycentri
 
     min  y . sigma   s.t.  sigma >= 0,   W_J sigma <= s*_J,   W_k sigma = s*_k,
 
-with ``W_J = K_J + m_J y^T`` (``K = -G_J E``) and ``s*_J`` the slacks of the other rows at the
-``lam2`` optimum (``>= 0``).  ``sigma = 0`` (the ``lam2`` vertex) is dual feasible (``y >= 0``)
-and violates only row ``k``: the dual simplex starts there with an empty working basis.  At
-each step the working basis is the ``m x m`` block ``W_{T,P}`` of the rows ``T`` tight and the
-coordinates ``P`` basic, kept as an explicit inverse (:mod:`.inverse_updates`); a pivot costs
-``O(N m + m^2)`` against ``O(N^2)`` for the dual simplex in ``v`` (:mod:`.dual_simplex`, whose
-capped LPs took 149 s for a batch of 8 on a 2000-crack network).
+with ``W_J = K_J + m_J y^T`` (``K = -G_J E``) and ``s*_J >= 0`` the slacks of the other rows
+at the ``lam2`` optimum.  ``sigma = 0`` (the ``lam2`` vertex) is dual feasible (``y >= 0``) and
+violates only row ``k``: the dual simplex starts there with an empty working basis, the ``m x
+m`` block ``W_{T,P}`` (rows ``T`` tight, coordinates ``P`` basic) kept as an explicit inverse
+(:mod:`.inverse_updates`): a pivot costs ``O(N m + m^2)``, not the ``O(N^2)`` of the dual
+simplex in ``v`` (:mod:`.dual_simplex`: 149 s for 8 capped LPs on a 2000-crack network).
 
 Nothing is taken on trust: the optimum is mapped back to ``(v, lam)`` and its multipliers to
 the rows of the LP in ``v`` (the multiplier of row ``a`` of the basis is the reduced cost of
@@ -25,19 +24,21 @@ clipped to zero for the costs; an optimum that then fails the dual-sign check is
 from __future__ import annotations
 
 import warnings
+from dataclasses import replace
 
 import numpy as np
 import scipy.linalg as sla
 
 from ..model.errors import InputError
 from . import inverse_updates as iu
-from .certificates import CERT_TOL, DenseAnswer, kkt_residuals
+from .certificates import CERT_TOL, DenseAnswer, batch_residuals, kkt_residuals
 
 #: Primal feasibility tolerance (relative to the largest ``s*``) and pivot tolerance.
 FEAS_TOL = 1e-10
 PIV_TOL = 1e-9
-#: Pivots an LP of :meth:`BasisLP.race` goes on for before the dual bounds are compared again.
-RACE_CHUNK = 100
+#: Pivots an LP of :meth:`BasisLP.race` goes on for before the dual bounds are compared again,
+#: and the answers it certifies together.
+RACE_CHUNK, VERIFY_BATCH = 100, 8
 
 
 class BasisLP:
@@ -117,15 +118,17 @@ class BasisLP:
         :meth:`solve`) in the order the LPs finish.
 
         The LPs advance in turns of ``chunk`` pivots (:data:`RACE_CHUNK`), the one with the
-        fewest pivots next; an LP whose dual bound ``lam2 - c . sigma`` (an upper bound of its
-        ``lam_high`` while the costs are not clipped, falling with every pivot) drops below
-        ``below`` runs to its end before any other moves on.  So the first row with ``lam_high <
-        below`` to be seen is seen after about ``len(rows)`` times the pivots its bound needs to
-        cross ``below``, not after every LP before it in ``rows`` (issue 26, a 2000-crack
-        network: the batch's row below the incumbent was the last of 8, 2.1e4 pivots later).
+        fewest pivots next; one whose dual bound ``lam2 - c . sigma`` (an upper bound of its
+        ``lam_high`` while the costs are not clipped) drops below ``below`` runs to its end
+        first.  So a row with ``lam_high < below`` is seen after about ``len(rows)`` times the
+        pivots its bound needs to cross ``below`` (issue 26, a 2000-crack network: the batch's
+        row below the incumbent was the last of 8, 2.1e4 pivots later one after the other).
         A caller that has what it needs stops iterating; the LPs left are dropped.  Without a
         row below ``below`` every LP runs to its end, as one after the other.  The answers are
-        those of :meth:`solve`, pivot for pivot (each LP has its own working arrays).
+        those of :meth:`solve`, pivot for pivot (each LP has its own working arrays), certified
+        :data:`VERIFY_BATCH` at a time (one pass over the LP's matrix for all: issue 26, 1324
+        LPs of ~100 pivots on a dense system of 2000 nodes spent 9.9 s in their certificates),
+        an answer below ``below`` at once after those finished before it.
         """
         chunk = RACE_CHUNK if chunk is None else chunk
         if not isinstance(chunk, (int, np.integer)) or chunk < 1:
@@ -139,7 +142,8 @@ class BasisLP:
                 continue
             KP = np.empty((len(self.rows), self.n + 2), order="F")  # its own (pages touched
             KT = np.empty((self.n + 2, self.n + 1))  # as the working basis grows)
-            runs.append([self.f.lam2, 0, k, self._steps(k, kl, None, KP, KT)])
+            runs.append([self.f.lam2, 0, k, self._steps(k, kl, None, KP, KT, verify=False)])
+        done = []  # finished, not yet certified
         try:
             while runs:
                 hot = [i for i, r in enumerate(runs) if below is not None and r[0] < below]
@@ -149,13 +153,17 @@ class BasisLP:
                     for _ in range(chunk):
                         run[0] = next(run[3])
                         run[1] += 1
-                except StopIteration as done:
+                except StopIteration as end:
                     runs.pop(i)
-                    yield run[2], done.value
+                    done.append((run[2], end.value))
+                    low = below is not None and end.value.x is not None and end.value.x[-1] < below
+                    if low or len(done) >= VERIFY_BATCH or not runs:
+                        yield from self._certify(done)
+                        done = []
         finally:  # (the caller stopped iterating: the LPs left are dropped)
             self.dropped += sum(r[1] for r in runs)
 
-    def _steps(self, k, kl, max_pivots, KP, KT):
+    def _steps(self, k, kl, max_pivots, KP, KT, verify=True):
         """The dual simplex of :meth:`solve` as a generator: yields the dual bound ``lam2 - c .
         sigma`` after each pivot, returns the answer (``StopIteration.value``).  ``KP``,
         ``KT``: its working arrays (``K`` at the basic coordinates, at the tight rows)."""
@@ -192,7 +200,7 @@ class BasisLP:
                         W, it = self._primal_finish(kl, P, T, W, it, cap, KP, KT)
                         if W is None:
                             return self._failed(it)
-                    return self._answer(k, P, T, W, it)
+                    return self._answer(k, P, T, W, it, verify)
                 kind, q, sgn = ("row", i, 1.0) if sJ[i] <= worst else ("coord", r, 1.0)
             if it >= cap:  # stopped: the dual bound ranks the row (screening)
                 lam_ub = f.lam2 - (float(c[P] @ sP) if m else 0.0)
@@ -327,8 +335,9 @@ class BasisLP:
             if W is None:
                 return None, it
 
-    def _answer(self, k, P, T, W, it):
-        """The optimum in ``v`` with its multipliers on the tableau's rows, certified there."""
+    def _answer(self, k, P, T, W, it, verify=True):
+        """The optimum in ``v`` with its multipliers on the tableau's rows, certified there
+        (``verify=False``: status ``"unverified"``, for :meth:`_certify`)."""
         f, tab = self.f, self.tab
         W = self._inverse(P, T) if P else W  # fresh values for the answer
         if W is None:
@@ -344,12 +353,35 @@ class BasisLP:
         Y[f.B[nb]] = d[nb] / self.gB[nb]
         Y[self.rows[T]] = z / self.g[T]
         x = np.r_[v, lam]
+        basis = np.r_[f.B[nb], self.rows[T]].astype(int)
+        if not verify:
+            return DenseAnswer("unverified", x, Y, basis, it, (np.nan,) * 4)
         res = kkt_residuals(tab.A, tab.b, tab.e, x, Y, equal=() if k is None else (k,),
                             rownorm=np.ones(tab.R))
-        basis = np.r_[f.B[nb], self.rows[T]].astype(int)
-        if max(res) > CERT_TOL:  # not certified: the caller solves it another way
-            return DenseAnswer("failed", x, Y, basis, it, (np.nan,) * 4)
-        return DenseAnswer("optimal", x, Y, basis, it, res)
+        return _judged(DenseAnswer("optimal", x, Y, basis, it, res))
+
+    def _certify(self, done):
+        """``(k, answer)`` for each ``(k, unverified answer)`` of ``done``, as :meth:`_answer`
+        certifies one: the KKT residuals of all in one pass (unit-norm rows)."""
+        todo = [g for g, (_, a) in enumerate(done) if a.status == "unverified"]
+        out = list(done)
+        if todo:
+            tab = self.tab
+            eq = np.zeros((len(todo), tab.R), bool)
+            eq[np.arange(len(todo)), [done[g][0] for g in todo]] = True
+            res = batch_residuals(tab.A, tab.b, tab.e, np.array([done[g][1].x for g in todo]),
+                                  np.array([done[g][1].y for g in todo]), eq)
+            for g, r in zip(todo, res, strict=True):
+                a = done[g][1]
+                out[g] = (done[g][0], _judged(replace(a, status="optimal", residuals=tuple(r))))
+        return out
+
+
+def _judged(ans):
+    """``ans``, ``"failed"`` if its residuals exceed ``CERT_TOL`` (then solved another way)."""
+    if max(ans.residuals) > CERT_TOL:
+        return replace(ans, status="failed", residuals=(np.nan,) * 4)
+    return ans
 
 
 def _drive(steps):
@@ -359,39 +391,3 @@ def _drive(steps):
             next(steps)
         except StopIteration as done:
             return done.value
-
-
-def separation_lp(frame, cs):
-    """``max lam`` with the no-separation rows ``sep_G v <= sep_c + lam sep_m`` added (MODEL.md
-    s.3), by the dual simplex from the ``lam2`` vertex (where some of them are violated).
-
-    Returns ``(answer, tab)``: the :class:`~.certificates.DenseAnswer` (multipliers on the rows
-    of ``tab``: ``[G, -m]``, the separation rows, ``-lam <= 0``, unit norm; the caller checks
-    its residuals) -- or ``(None, None)`` if the separation rows are sparse.
-    """
-    import scipy.sparse as sp
-
-    if sp.issparse(cs.sep_G):
-        return None, None
-    n, R = cs.n_nodes, len(cs.c)
-    A = np.vstack([np.hstack([cs.G, -cs.m[:, None]]), np.hstack([cs.sep_G, -cs.sep_m[:, None]]),
-                   np.r_[np.zeros(n), -1.0][None, :]])
-    b = np.r_[cs.c, cs.sep_c, 0.0]
-    nrm = np.linalg.norm(A, axis=1)
-    nrm[nrm == 0] = 1.0
-    tab = _Rows(A / nrm[:, None], b / nrm, np.r_[np.zeros(n), 1.0])
-    gx = np.linalg.norm(cs.sep_G, axis=1)
-    gx[gx == 0] = 1.0
-    Gx = np.vstack([cs.sep_G / gx[:, None], np.zeros((1, n))])
-    cx = np.r_[cs.sep_c / gx, 0.0]
-    mx = np.r_[cs.sep_m / gx, 1.0]  # last: lam >= 0
-    lp = BasisLP(frame, tab, extra=(Gx, cx, mx, np.r_[R + np.arange(n), R + n]))
-    return lp.solve(None), tab
-
-
-class _Rows:
-    """The rows of an LP in ``v`` (unit norm) as :class:`BasisLP` reads them."""
-
-    def __init__(self, A, b, e):
-        self.A, self.b, self.e = A, b, e
-        self.R, self.n = A.shape

@@ -19,11 +19,11 @@ import numpy as np
 
 from . import dense_lp
 from .barycentric_walk import SimplexFrame
-from .basis_lp import separation_lp
 from .certificates import CERT_TOL
 from .constraints import ConstraintSet
 from .highs_path import RESIDUAL_NAMES, HighsModel
 from .lp import LPAnswer
+from .no_separation import separation_lp
 from .outcome import PathOutcome, lam1_from_intervals, separation_outcome, value
 from .provenance import StageLog
 from .pruning import lam_high_pruned

@@ -162,11 +162,11 @@ def test_no_separation_lp_matches_highs(seed, monkeypatch):
     """The no-separation LP by the dual simplex from the lam2 vertex (the separation rows
     violated there): certified, and the limit and the nodes are HiGHS's; when it fails, HiGHS
     answers instead (same result)."""
-    from shakedown.bounds import basis_lp, dense_path
+    from shakedown.bounds import dense_path, no_separation
 
     system, load = _tensile_problem(20, seed)
     seen = []
-    orig = basis_lp.separation_lp
+    orig = no_separation.separation_lp
 
     def spy(frame, cs):
         ans, tab = orig(frame, cs)

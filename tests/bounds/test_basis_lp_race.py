@@ -31,11 +31,15 @@ def _frame(case):
 
 
 def _same(a, b):
+    """The same answer bit for bit; its residuals (the race certifies its answers together,
+    :func:`~shakedown.bounds.certificates.batch_residuals`, in another order of the sums) to
+    round-off of the residuals themselves."""
     if a is None or b is None:
         return a is None and b is None
     return (a.status == b.status and a.iterations == b.iterations
             and all(np.array_equal(u, v, equal_nan=True) for u, v in
-                    ((a.x, b.x), (a.y, b.y), (a.basis, b.basis), (a.residuals, b.residuals))))
+                    ((a.x, b.x), (a.y, b.y), (a.basis, b.basis)))
+            and np.allclose(a.residuals, b.residuals, rtol=0.0, atol=1e-14, equal_nan=True))
 
 
 @pytest.mark.parametrize("case", ["random40", "dup20", "kachanov60"])
@@ -61,8 +65,8 @@ def _spy(monkeypatch):
     log = []
     orig = BasisLP._steps
 
-    def steps(self, k, *args):
-        g = orig(self, k, *args)
+    def steps(self, k, *args, **kw):
+        g = orig(self, k, *args, **kw)
         while True:
             try:
                 bound = next(g)
@@ -105,3 +109,35 @@ def test_race_rejects_a_bad_chunk(chunk):
     f, tab, main = _frame("random40")
     with pytest.raises(InputError, match="chunk"):
         next(BasisLP(f, tab).race([int(f.J[0])], chunk=chunk))
+
+
+def test_the_race_certifies_together_what_solve_certifies_alone():
+    """The race's certificates (:meth:`BasisLP._certify`, one pass for a batch): the residuals
+    of :func:`kkt_residuals` for each answer, and a wrong answer in the batch -- a point moved
+    off its optimum, multipliers of the wrong sign -- refused while the others pass."""
+    from dataclasses import replace
+
+    from shakedown.bounds.certificates import CERT_TOL, kkt_residuals
+
+    f, tab, main = _frame("kachanov60")
+    lp = BasisLP(f, tab)
+    rows = [int(k) for k in f.J[:6]]
+    alone = {k: lp.solve(k) for k in rows}
+    rows = [k for k in rows if alone[k] is not None and alone[k].status == "optimal"]
+    assert len(rows) >= 4
+    unverified = [(k, replace(alone[k], status="unverified")) for k in rows]
+    good = lp._certify(unverified)
+    for (k, a), ref in zip(good, rows, strict=True):
+        assert k == ref and a.status == "optimal"
+        want = kkt_residuals(tab.A, tab.b, tab.e, a.x, a.y, equal=(k,), rownorm=np.ones(tab.R))
+        assert np.allclose(a.residuals, want, rtol=0.0, atol=1e-14)
+    bad = list(unverified)
+    k1, a1 = bad[1]
+    bad[1] = (k1, replace(a1, x=a1.x + 1e-3 * np.abs(a1.x).max()))  # violates rows
+    k2, a2 = bad[2]
+    y2 = a2.y.copy()
+    y2[np.argmax(y2)] *= -1.0  # a multiplier of the wrong sign
+    bad[2] = (k2, replace(a2, y=y2))
+    out = lp._certify(bad)
+    assert [a.status for _, a in out] == ["optimal", "failed", "failed"] + ["optimal"] * (len(rows) - 3)
+    assert all(max(a.residuals) <= CERT_TOL for _, a in out if a.status == "optimal")
