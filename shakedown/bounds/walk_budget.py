@@ -9,7 +9,7 @@ LP (:meth:`~.basis_lp.BasisLP.race`).  Which is cheaper depends on the problem:
   reach their row, ~14 pivots each; an exact LP takes 2500-4700 pivots.  Walking is right.
 * Random dense system i = 5 (``lam1`` 0.12 % below ``lam2``): 10 % of the walks reach their
   row; 1696 of them stop undecided after 60 pivots, 1693 of those go on for up to 400 more, and
-  the exact LPs take ~90 pivots each.  The walks were 183 of the stage's 211 s CPU.
+  the exact LPs take ~100 pivots each.  The walks were 183 of the stage's 211 s CPU.
 
 :class:`WalkBudget` counts, for the short walks, the long walks and the LPs separately, the
 pivots spent and the rows they decided (rows proven ``lam_high >= t`` or solved exactly, at the
