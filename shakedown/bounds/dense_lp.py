@@ -36,6 +36,9 @@ from .ipm import complete_basis, identify_basis, ipm, strongly_active
 #: rows of 2001, a 1997-row dense ``linprog`` of 93 s (202 s for the whole ``lam2`` LP), where
 #: the identified basis is finished to the same certified optimum in 4.9 s.
 COMPLETION_LP_MAX = 100
+#: Gondzio's correctors of a second interior point where the crossover from the first (without
+#: them) is not certified (0: none; then HiGHS answers).
+RETRY_CORRECTORS = 2
 
 __all__ = [
     "CERT_TOL", "FEAS_TOL", "PIVOT_TOL", "DenseAnswer", "Tableau", "batch_dual_simplex",
@@ -100,6 +103,12 @@ def solve_max(A, b, e, *, max_iter=80, interior=False, why=None, accept=None, st
             return got, None
     T = identify_basis(As, z, s, n)
     ans, tab = _crossover(A, b, e, T, As, s, z, it)
+    if ans is None and not correctors and accept is None and stop is None and RETRY_CORRECTORS:
+        # once more with centrality correctors: another stalled iterate, another basis (issue
+        # 26, FE strip i = 19 at N = 2000: certified with them, to HiGHS without)
+        x2, s2, z2, status2, it2 = ipm(As, bs, e, max_iter=max_iter, correctors=RETRY_CORRECTORS)
+        if status2 != "failed":
+            ans, tab = _crossover(A, b, e, identify_basis(As, z2, s2, n), As, s2, z2, it + it2)
     if ans is None:  # (the identified basis once: 33 s at N = 2000 before it was blocked)
         why.update(reason="crossover from the interior point not certified", basis=T)
     if ans is None and interior:

@@ -364,3 +364,35 @@ def test_a_large_completion_lp_is_not_tried_first(monkeypatch, limit):
         assert calls == ["finish_from"]
     else:
         assert calls[0] == "complete_basis"
+
+
+@pytest.mark.parametrize("retry", [2, 0])
+def test_a_failed_crossover_is_retried_with_correctors(monkeypatch, retry):
+    """Issue 26 (FE strip i = 19 at N = 2000): the crossover from the interior point without
+    centrality correctors is not certified, from one with them it is.  ``solve_max`` runs the
+    interior point once more with ``RETRY_CORRECTORS`` before giving up (then HiGHS answers in
+    :mod:`~shakedown.bounds.dense_path`); with 0 it gives up at once."""
+    A, b, e = random_lp(8, 30, 5)
+    real_ipm, real_cross = dense_lp.ipm, dense_lp._crossover
+    runs, crossings = [], []
+
+    def ipm(*a, **k):
+        runs.append(k.get("correctors", 0))
+        return real_ipm(*a, **k)
+
+    def crossover(*a, **k):
+        crossings.append(1)
+        return (None, None) if len(crossings) == 1 else real_cross(*a, **k)  # the first fails
+
+    monkeypatch.setattr(dense_lp, "ipm", ipm)
+    monkeypatch.setattr(dense_lp, "_crossover", crossover)
+    monkeypatch.setattr(dense_lp, "RETRY_CORRECTORS", retry)
+    why = {}
+    ans, tab = dense_lp.solve_max(A, b, e, why=why)
+    if retry:
+        assert runs == [0, retry] and len(crossings) == 2
+        assert ans is not None and ans.status == "optimal" and tab.dual_feasible
+        assert e @ ans.x == pytest.approx(highs_max(A, b, e), rel=1e-9)
+        assert max(dense_lp.kkt_residuals(A, b, e, ans.x, ans.y)) <= dense_lp.CERT_TOL
+    else:
+        assert runs == [0] and ans is None and "crossover" in why["reason"]
