@@ -64,7 +64,9 @@ def ipm(A, b, e, *, tol=IPM_TOL, max_iter=80, stop=None, correctors=0):  # noqa:
         iterate: on a 2000-node FE strip (``bench_bounds_realizations.py --kind fe``, i = 4)
         the corrected iterate stalled at another point, from which no basis was identified
         (the crossover then spent 222 s in :func:`complete_basis`'s ``linprog``); 2 for the
-        Chebyshev centre, whose iterate is accepted by its own certificate (fewer iterations).
+        Chebyshev centre, whose iterate is accepted by its own certificate (fewer iterations),
+        and for the second try of an LP whose first crossover failed
+        (:data:`~.dense_lp.RETRY_CORRECTORS`).
 
     Returns
     -------
@@ -153,9 +155,9 @@ def _centrality(A, solve, s, z, target, direction, correctors):
     Issue 26 (2000-crack networks, LPs of 4001 x 2001): without them the steps of the ``lam2``
     LP were 0.25-0.7 for 18 iterations (a few badly centred pairs block them), 30 iterations of
     ~0.8 s, 26 with them; the Chebyshev centre's LP 21 -> 18 iterations.  Used for the centre
-    only (see ``correctors`` in :func:`ipm`).  Reference: J. Gondzio, Multiple centrality
-    corrections in a primal-dual method for linear programming, Computational Optimization and
-    Applications 6 (1996) 137-156."""
+    and for a second try after a failed crossover (see ``correctors`` in :func:`ipm`).
+    Reference: J. Gondzio, Multiple centrality corrections in a primal-dual method for linear
+    programming, Computational Optimization and Applications 6 (1996) 137-156."""
     dx, ds, dz = direction
     ap, ad = _step(s, ds), _step(z, dz)
     zero = np.zeros(len(s))

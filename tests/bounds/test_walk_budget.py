@@ -7,9 +7,8 @@ counts, is the same on every run."""
 from __future__ import annotations
 
 import numpy as np
-from test_pruning import assert_fast_matches_full
+from test_pruning import _unscreened_network, assert_fast_matches_full
 
-import crack_networks as cn
 import shakedown as sd
 from shakedown.bounds import pruning, walk_budget
 from shakedown.bounds.walk_budget import WalkBudget
@@ -40,24 +39,21 @@ def test_the_cheaper_way_wins_and_the_choice_follows_the_counts():
     assert b.worth("short")
 
 
-def _network(n=120, seed=2):
-    cracks = cn.sample_crack_set(n, density=0.1, half_length=1.0, min_spacing=0.1,
-                                 rng=np.random.default_rng(seed))
-    model = cn.kachanov_model(cracks, shear_modulus=1.0, poisson_ratio=0.25, friction=0.6)
-    return model.system, model.load_cycle(static=(-1.0, 0.0, -1.0), cyclic=(0.0, 1.0, 0.0))
+def _short_walks(monkeypatch):
+    """The 120-crack network of :func:`test_pruning._unscreened_network` with walks of 2 pivots
+    (the walks and LPs decide most rows) and the budget's counts trusted early."""
+    monkeypatch.setattr(pruning, "WALK_CAP", 2)
+    monkeypatch.setattr(pruning, "LONG_WALK_CAP", 2)
+    monkeypatch.setattr(walk_budget, "MIN_WALKS", 4)
+    monkeypatch.setattr(walk_budget, "MIN_LP_ROWS", 1)
+    model, load = _unscreened_network(monkeypatch)
+    return model.system, load
 
 
 def test_answers_do_not_depend_on_who_decides(monkeypatch):
     """From an unscreened start, with short walks (the walks and LPs decide most rows): with
     LPs counted free, walking stops as soon as the counts are trusted and the LPs decide the
     rest; counted dear, walking never stops.  Both give the full computation's answers."""
-    monkeypatch.setattr(pruning, "WALK_CAP", 2)
-    monkeypatch.setattr(pruning, "LONG_WALK_CAP", 2)
-    monkeypatch.setattr(pruning, "INIT_LPS", 1)
-    monkeypatch.setattr(pruning, "UNSCREENED_LPS", 1)
-    monkeypatch.setattr(pruning, "SCREEN_ROWS", 0)
-    monkeypatch.setattr(walk_budget, "MIN_WALKS", 4)
-    monkeypatch.setattr(walk_budget, "MIN_LP_ROWS", 1)
     budgets = []
     run = pruning._Pruner.run
 
@@ -66,7 +62,7 @@ def test_answers_do_not_depend_on_who_decides(monkeypatch):
         return run(self)
 
     monkeypatch.setattr(pruning._Pruner, "run", spy)
-    system, load = _network()
+    system, load = _short_walks(monkeypatch)
     out = {}
     for weight in (0.0, 1e9):
         monkeypatch.setattr(walk_budget, "LP_PIVOT_WEIGHT", weight)
@@ -82,14 +78,7 @@ def test_answers_do_not_depend_on_who_decides(monkeypatch):
 
 
 def test_the_choice_is_the_same_on_every_run(monkeypatch):
-    monkeypatch.setattr(pruning, "WALK_CAP", 2)
-    monkeypatch.setattr(pruning, "LONG_WALK_CAP", 2)
-    monkeypatch.setattr(pruning, "INIT_LPS", 1)
-    monkeypatch.setattr(pruning, "UNSCREENED_LPS", 1)
-    monkeypatch.setattr(pruning, "SCREEN_ROWS", 0)
-    monkeypatch.setattr(walk_budget, "MIN_WALKS", 4)
-    monkeypatch.setattr(walk_budget, "MIN_LP_ROWS", 1)
-    system, load = _network()
+    system, load = _short_walks(monkeypatch)
     a = sd.shakedown_bounds(system, load)
     b = sd.shakedown_bounds(system, load)
     np.testing.assert_array_equal(a.lam_high, b.lam_high)
