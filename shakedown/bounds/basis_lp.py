@@ -30,6 +30,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from ..model.errors import InputError
+from . import basis_kernel as bk
 from . import inverse_updates as iu
 from .certificates import CERT_TOL, DenseAnswer, batch_residuals, kkt_residuals
 
@@ -39,6 +40,9 @@ PIV_TOL = 1e-9
 #: Pivots an LP of :meth:`BasisLP.race` goes on for before the dual bounds are compared again,
 #: and the answers it certifies together.
 RACE_CHUNK, VERIFY_BATCH = 100, 8
+#: Smallest problem (nodes) whose pivots run compiled (:mod:`.basis_kernel`, numba); below,
+#: in NumPy (a cold cache's compilation, ~s, would cost more than it saves).
+KERNEL_MIN_N = 800
 
 
 class BasisLP:
@@ -111,7 +115,14 @@ class BasisLP:
         kl = -1 if k is None else int(self.loc[k])
         if kl < 0 and k is not None:
             return None
-        return _drive(self._steps(k, kl, max_pivots, self.KP, self.KT))
+        return _drive(self._run(k, kl, max_pivots, self.KP, self.KT))
+
+    def _run(self, k, kl, max_pivots, KP, KT, verify=True, chunk=None):
+        """The dual simplex of row ``k`` as a generator (:meth:`_steps`): compiled
+        (:func:`.basis_kernel.steps`) on problems of :data:`KERNEL_MIN_N` nodes or more."""
+        if self.n >= KERNEL_MIN_N and bk.HAVE_KERNEL:
+            return bk.steps(self, k, kl, max_pivots, KP, KT, verify, chunk)
+        return self._steps(k, kl, max_pivots, KP, KT, verify)
 
     def race(self, rows, below: float | None = None, chunk: int | None = None):
         """The exact answers of several rows side by side: yields ``(k, answer)`` (as
@@ -142,7 +153,7 @@ class BasisLP:
                 continue
             KP = np.empty((len(self.rows), self.n + 2), order="F")  # its own (pages touched
             KT = np.empty((self.n + 2, self.n + 1))  # as the working basis grows)
-            runs.append([self.f.lam2, 0, k, self._steps(k, kl, None, KP, KT, verify=False)])
+            runs.append([self.f.lam2, 0, k, self._run(k, kl, None, KP, KT, False, chunk)])
         done = []  # finished, not yet certified
         try:
             while runs:
@@ -150,9 +161,9 @@ class BasisLP:
                 i = hot[0] if hot else min(range(len(runs)), key=lambda i: runs[i][1])
                 run = runs[i]
                 try:
-                    for _ in range(chunk):
-                        run[0] = next(run[3])
-                        run[1] += 1
+                    goal = run[1] + chunk
+                    while run[1] < goal:
+                        run[0], run[1] = next(run[3])
                 except StopIteration as end:
                     runs.pop(i)
                     done.append((run[2], end.value))
@@ -165,7 +176,8 @@ class BasisLP:
 
     def _steps(self, k, kl, max_pivots, KP, KT, verify=True):
         """The dual simplex of :meth:`solve` as a generator: yields the dual bound ``lam2 - c .
-        sigma`` after each pivot, returns the answer (``StopIteration.value``).  ``KP``,
+        sigma`` and the pivots so far after each pivot, returns the answer
+        (``StopIteration.value``).  ``KP``,
         ``KT``: its working arrays (``K`` at the basic coordinates, at the tight rows)."""
         f = self.f
         y, c, mJ, K = f.y, self.cost, self.mJ, self.K
@@ -181,7 +193,7 @@ class BasisLP:
                     return self._failed(it)
             sP = W @ self.star[T] if m else np.zeros(0)
             if it:
-                yield f.lam2 - (float(c[P] @ sP) if m else 0.0)
+                yield f.lam2 - (float(c[P] @ sP) if m else 0.0), it
             ys = float(y[P] @ sP) if m else 0.0
             sJ = self.star - (KP[:, :m] @ sP if m else 0.0) - mJ * ys
             sJ[T] = 0.0

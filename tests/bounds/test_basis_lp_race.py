@@ -61,7 +61,8 @@ def test_race_gives_the_answers_of_solve(case, chunk):
 
 
 def _spy(monkeypatch):
-    """Log of every pivot of every LP: ``(row, dual bound after it)``."""
+    """Log of every pivot of every LP: ``(row, dual bound after it)`` (the NumPy pivots:
+    these problems are below ``basis_lp.KERNEL_MIN_N``)."""
     log = []
     orig = BasisLP._steps
 
@@ -69,11 +70,11 @@ def _spy(monkeypatch):
         g = orig(self, k, *args, **kw)
         while True:
             try:
-                bound = next(g)
+                bound, pivots = next(g)
             except StopIteration as done:
                 return done.value
             log.append((k, bound))
-            yield bound
+            yield bound, pivots
 
     monkeypatch.setattr(BasisLP, "_steps", steps)
     return log
