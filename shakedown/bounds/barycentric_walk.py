@@ -38,7 +38,9 @@ import warnings
 import numpy as np
 import scipy.linalg as sla
 
+from . import basis_lp
 from . import inverse_updates as iu
+from . import walk_kernel as wk
 from .facet_walk import FacetWalk, batch_check
 
 #: Most rows outside the ``lam2`` basis that may be tight at a vertex of a walk (beyond it the
@@ -251,16 +253,21 @@ class BarycentricWalk:
             return None
         g = self.f.K[kl]  # max G_k v = max K_k . sigma (+ const)
         res = None
-        for _ in range(cap + 1):
-            step = self._pivot(g, kl)
-            if step is None:  # broken
-                self.broken = True
-                break
-            if step == "optimal":
-                res = False
-                break
-            if kl in self.Tl:
-                break
+        if self.n >= basis_lp.KERNEL_MIN_N and wk.HAVE_KERNEL:  # the same pivots, compiled
+            end = wk.walk(self, g, kl, cap, CHECK_BATCH, PIV_TOL)
+            self.broken = end is None
+            res = False if end == "optimal" else None
+        else:
+            for _ in range(cap + 1):
+                step = self._pivot(g, kl)
+                if step is None:  # broken
+                    self.broken = True
+                    break
+                if step == "optimal":
+                    res = False
+                    break
+                if kl in self.Tl:
+                    break
         if res is None and not self.broken and kl in self.Tl and 0 < len(self._buffer) < CHECK_BATCH:
             return UNCHECKED  # k tight at the current vertex: checked with the next batch
         if not self.flush():
@@ -335,13 +342,18 @@ class BarycentricWalk:
         self.since += 1
         if iu.refactor_due(self.since, len(self.P)) and not self._refactor():
             return None
-        if e >= 0 or kind == "row":
-            if not self.covered[self.f.J[self.Tl]].all():
-                self._buffer.append(self._vertex())
-                self.unchecked[self.f.J[self.Tl]] = True
-                if len(self._buffer) >= CHECK_BATCH and not self._flush():
-                    return None
-        return "moved"
+        return "moved" if self._note_vertex(e >= 0 or kind == "row") else None
+
+    def _note_vertex(self, changed) -> bool:
+        """After a pivot that ``changed`` the tight rows: the vertex joins the batch to check
+        if it has a row not yet covered (checked when the batch is full; ``False`` if that
+        check fails)."""
+        if changed and not self.covered[self.f.J[self.Tl]].all():
+            self._buffer.append(self._vertex())
+            self.unchecked[self.f.J[self.Tl]] = True
+            if len(self._buffer) >= CHECK_BATCH and not self._flush():
+                return False
+        return True
 
     def _update(self, kind, q, e, j, dP, dS, step):
         """Move to the adjacent vertex: coordinate ``e`` (or the slack of tight row ``Tl[j]``,

@@ -16,7 +16,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..evolution.kernel_jit import HAVE_KERNEL, njit
+from ..model.jit import HAVE_KERNEL, njit
+from . import inverse_updates as iu
+from .certificates import DenseAnswer
 
 #: What :func:`advance` returns: pivots done (the budget), ``W`` due for a recomputation,
 #: optimal, the pivot cap reached (``out[0]``: the dual bound), failed (no entering variable or
@@ -268,13 +270,10 @@ def advance(K, KF, mJ, y, c, star, lam2, tol, piv_tol, kl, cap, refactor, refact
         done += 1
 
 
-def steps(lp, k, kl, max_pivots, KP, KT, verify=True, chunk=None):
-    """:meth:`.BasisLP._steps` with the pivots in :func:`advance`: the same generator protocol
-    (yields ``(dual bound, pivots)``, at most every ``chunk`` pivots; returns the answer)."""
-    from . import inverse_updates as iu
-    from .basis_lp import PIV_TOL
-    from .certificates import DenseAnswer
-
+def steps(lp, k, kl, max_pivots, KP, KT, piv_tol, verify=True, chunk=None):
+    """:meth:`.BasisLP._steps` of ``lp`` with the pivots in :func:`advance`: the same generator
+    protocol (yields ``(dual bound, pivots)``, at most every ``chunk`` pivots; returns the
+    answer); ``piv_tol``: :data:`.basis_lp.PIV_TOL`."""
     f = lp.f
     ncol = lp.n + 1
     cap = max_pivots if max_pivots is not None else 4 * lp.n + 100
@@ -286,7 +285,7 @@ def steps(lp, k, kl, max_pivots, KP, KT, verify=True, chunk=None):
     out = np.zeros(1)
     last = 0  # pivots at the last yield
     while True:
-        code = advance(lp.K, lp.KF, lp.mJ, f.y, lp.cost, lp.star, f.lam2, lp.tol, PIV_TOL,
+        code = advance(lp.K, lp.KF, lp.mJ, f.y, lp.cost, lp.star, f.lam2, lp.tol, piv_tol,
                        kl, cap, iu.REFACTOR, iu.REFACTOR_DIV, P, T, W, KP, KT, st,
                        max(chunk - (int(st[1]) - last), 1), out)
         m, it = int(st[0]), int(st[1])

@@ -121,7 +121,7 @@ class BasisLP:
         """The dual simplex of row ``k`` as a generator (:meth:`_steps`): compiled
         (:func:`.basis_kernel.steps`) on problems of :data:`KERNEL_MIN_N` nodes or more."""
         if self.n >= KERNEL_MIN_N and bk.HAVE_KERNEL:
-            return bk.steps(self, k, kl, max_pivots, KP, KT, verify, chunk)
+            return bk.steps(self, k, kl, max_pivots, KP, KT, PIV_TOL, verify, chunk)
         return self._steps(k, kl, max_pivots, KP, KT, verify)
 
     def race(self, rows, below: float | None = None, chunk: int | None = None):

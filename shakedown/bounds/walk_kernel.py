@@ -1,0 +1,304 @@
+"""The pivots of :class:`~.barycentric_walk.BarycentricWalk` compiled (numba).
+
+:func:`pivots` is the loop of :meth:`.BarycentricWalk._pivot` and :meth:`._update`, pivot for
+pivot the same rules (Dantzig pricing, the target's row first among ties of the ratio test, then
+the largest pivot element; the same tolerances), on the walk's state kept in buffers of fixed
+capacity.  It hands back to Python (:func:`walk`) for what is not a pivot: the recomputation of
+the working inverse from scratch, the check of a batch of vertices in ``v``, the end of the walk.
+Nothing is concluded here: the vertices are checked in ``v`` as before (issue 26: at ``m`` ~ 50
+rows tight outside the ``lam2`` basis a pivot spent ~0.3 ms in small NumPy calls).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..model.jit import HAVE_KERNEL, njit
+from . import inverse_updates as iu
+
+#: What :func:`pivots` returns: the budget spent, ``W`` due for a recomputation, the batch of
+#: vertices to check is full, the target row became tight, optimal (the target stays slack),
+#: broken (unbounded, or more tight rows than allowed).
+BUDGET, REFACTOR, FLUSH, REACHED, OPTIMAL, BROKEN = 0, 1, 2, 3, 4, 5
+
+__all__ = ["HAVE_KERNEL", "pivots", "walk"]
+
+
+@njit(cache=True)
+def pivots(K, KF, y, g, kl, piv_tol, limit, refactor, refactor_div, P, Tl, W, KP, KT, sP, sJ,
+           covered, unchecked, Jrows, S, room, st, budget):  # pragma: no cover - compiled
+    """Pivots of ``max g . sigma`` from the state ``(P, Tl, W, KP, KT, sP, sJ)`` with ``st =
+    [m, pivots since W was recomputed, vertices written to S, whether the last pivot changed
+    the tight rows]`` (updated in place), at most ``budget``; a code of this module."""
+    nJ, ncol = K.shape
+    z = np.empty(ncol)
+    rc = np.empty(ncol)
+    col = np.empty(ncol)
+    dP = np.empty(ncol)
+    dS = np.empty(nJ)
+    done = 0
+    while done < budget:
+        m, since = st[0], st[1]
+        nT = m - 1
+        # pricing: reduced costs per unit of slack
+        for j in range(m):
+            acc = 0.0
+            for i in range(m):
+                acc += W[i, j] * g[P[i]]
+            z[j] = acc
+        w = z[0]
+        for e in range(ncol):
+            rc[e] = g[e] - w * y[e]
+        for j in range(nT):
+            a = z[1 + j]
+            for e in range(ncol):
+                rc[e] -= a * KT[j, e]
+        for i in range(m):
+            rc[P[i]] = 0.0
+        scale = 1e-300
+        for e in range(ncol):
+            scale = max(scale, abs(rc[e]))
+        for j in range(nT):
+            scale = max(scale, abs(z[1 + j]))
+        e = 0
+        for c in range(1, ncol):
+            if rc[c] > rc[e]:
+                e = c
+        best = rc[e]
+        jj = -1
+        if nT:
+            jj = 0
+            for j in range(1, nT):
+                if z[1 + j] < z[1 + jj]:
+                    jj = j
+            if -z[1 + jj] > best:
+                best, e = -z[1 + jj], -1
+        if not best > piv_tol * scale:
+            return OPTIMAL
+        # the edge: basic coordinates and slacks per unit of the entering variable
+        if e >= 0:
+            col[0] = y[e]
+            for i in range(nT):
+                col[1 + i] = KT[i, e]
+            for i in range(m):
+                acc = 0.0
+                for j in range(m):
+                    acc += W[i, j] * col[j]
+                dP[i] = -acc
+            for r in range(nJ):
+                dS[r] = -KF[r, e]
+        else:
+            for i in range(m):
+                dP[i] = -W[i, 1 + jj]
+            for r in range(nJ):
+                dS[r] = 0.0
+        for i in range(m):
+            a = dP[i]
+            for r in range(nJ):
+                dS[r] -= KP[r, i] * a
+        for i in range(nT):
+            dS[Tl[i]] = 0.0
+        if e < 0:
+            dS[Tl[jj]] = 1.0
+        # ratio test over the basic coordinates and the slacks of the rows not tight
+        mp = 1.0
+        for i in range(m):
+            mp = max(mp, abs(dP[i]))
+        ms = 1.0
+        for r in range(nJ):
+            ms = max(ms, abs(dS[r]))
+        tl, ts = piv_tol * mp, piv_tol * ms
+        tmin = np.inf
+        for i in range(m):
+            if dP[i] < -tl:
+                tmin = min(tmin, max(sP[i], 0.0) / -dP[i])
+        for r in range(nJ):
+            if dS[r] < -ts:
+                tmin = min(tmin, max(sJ[r], 0.0) / -dS[r])
+        if not np.isfinite(tmin):
+            return BROKEN
+        near = tmin + 1e-12 * (1.0 + tmin)
+        if dS[kl] < -ts and max(sJ[kl], 0.0) / -dS[kl] <= near:
+            is_row, q = True, kl
+        else:
+            il, cl = 0, -np.inf
+            for i in range(m):
+                if dP[i] < -tl and max(sP[i], 0.0) / -dP[i] <= near and -dP[i] > cl:
+                    il, cl = i, -dP[i]
+            is_, cs = 0, -np.inf
+            for r in range(nJ):
+                if dS[r] < -ts and max(sJ[r], 0.0) / -dS[r] <= near and -dS[r] > cs:
+                    is_, cs = r, -dS[r]
+            is_row, q = (False, il) if cl >= cs else (True, is_)
+        if is_row and nT + (1 if e >= 0 else 0) > limit:
+            return BROKEN
+        # move to the adjacent vertex
+        step = tmin
+        for i in range(m):
+            sP[i] += step * dP[i]
+        for r in range(nJ):
+            sJ[r] += step * dS[r]
+        if is_row:
+            sJ[q] = 0.0
+        else:
+            sP[q] = 0.0
+        if not is_row and e >= 0:  # column q of M replaced by column e: wc = -dP
+            pq = -dP[q]
+            for j in range(m):
+                col[j] = W[q, j] / pq
+            for i in range(m):
+                a = -dP[i]
+                for j in range(m):
+                    W[i, j] -= a * col[j]
+            for j in range(m):
+                W[q, j] = col[j]
+            P[q] = e
+            sP[q] = step
+            for r in range(nJ):
+                KP[r, q] = KF[r, e]
+        elif not is_row:  # column q and row 1 + jj of M removed (the last ones move in)
+            rr = 1 + jj
+            piv = W[q, rr]
+            for i in range(m):
+                col[i] = W[i, rr]
+                z[i] = W[q, i]
+            for i in range(m):
+                a = col[i] / piv
+                for j in range(m):
+                    W[i, j] -= a * z[j]
+            last = m - 1
+            for j in range(m):
+                W[q, j], W[last, j] = W[last, j], W[q, j]
+            for i in range(m):
+                W[i, rr], W[i, last] = W[i, last], W[i, rr]
+            P[q], Tl[jj] = P[last], Tl[nT - 1]
+            sP[q] = sP[last]
+            for r in range(nJ):
+                KP[r, q] = KP[r, last]
+            for c in range(ncol):
+                KT[jj, c] = KT[nT - 1, c]
+            st[0] = m - 1
+        elif e >= 0:  # column e and row q added: schur = -dS[q]
+            schur = -dS[q]
+            for j in range(m):  # cw = K[q, P] W
+                acc = 0.0
+                for i in range(m):
+                    acc += K[q, P[i]] * W[i, j]
+                z[j] = acc
+            for i in range(m):
+                a = -dP[i] / schur
+                for j in range(m):
+                    W[i, j] += a * z[j]
+                W[i, m] = dP[i] / schur
+            for j in range(m):
+                W[m, j] = -z[j] / schur
+            W[m, m] = 1.0 / schur
+            P[m], Tl[nT] = e, q
+            sP[m] = step
+            for r in range(nJ):
+                KP[r, m] = KF[r, e]
+            for c in range(ncol):
+                KT[nT, c] = K[q, c]
+            st[0] = m + 1
+        else:  # row 1 + jj of M replaced by row q of K
+            rr = 1 + jj
+            for i in range(m):
+                col[i] = K[q, P[i]] - KT[jj, P[i]]
+            for j in range(m):
+                acc = 0.0
+                for i in range(m):
+                    acc += col[i] * W[i, j]
+                z[j] = acc
+            den = dS[q]
+            for i in range(m):
+                col[i] = W[i, rr] / den
+            for i in range(m):
+                a = col[i]
+                for j in range(m):
+                    W[i, j] -= a * z[j]
+            Tl[jj] = q
+            for c in range(ncol):
+                KT[jj, c] = K[q, c]
+        done += 1
+        st[1] = since + 1
+        changed = e >= 0 or is_row
+        st[3] = 1 if changed else 0
+        m = st[0]
+        if st[1] >= max(refactor, m // refactor_div):
+            return REFACTOR  # the vertex is noted after the recomputation (Python)
+        if changed:
+            new = False
+            for i in range(m - 1):
+                if not covered[Jrows[Tl[i]]]:
+                    new = True
+                    break
+            if new:
+                v = st[2]
+                for c in range(ncol):
+                    S[v, c] = 0.0
+                for i in range(m):
+                    S[v, P[i]] = sP[i]
+                for i in range(m - 1):
+                    unchecked[Jrows[Tl[i]]] = True
+                st[2] = v + 1
+                if v + 1 >= room:
+                    return FLUSH
+        for i in range(m - 1):
+            if Tl[i] == kl:
+                return REACHED
+    return BUDGET
+
+
+def walk(bw, g, kl, cap, check_batch, piv_tol):
+    """Up to ``cap + 1`` pivots of ``bw`` (a :class:`.BarycentricWalk`) towards ``max g .
+    sigma`` in :func:`pivots`, as its Python loop: ``"optimal"``, ``"reached"`` (row ``kl``
+    tight), ``None`` (broken) or ``"cap"``.  The kernel's buffers live on the walk; its
+    ``W`` and ``sP`` are views of them between calls (copied in only after Python replaced
+    them, as a recomputation does)."""
+    f = bw.f
+    if getattr(bw, "_kbuf", None) is None:
+        capm = bw.KP.shape[1]
+        bw._kbuf = (np.zeros(capm, np.int64), np.zeros(capm, np.int64), np.empty((capm, capm)),
+                    np.empty(capm), np.empty((check_batch, f.K.shape[1])), np.zeros(4, np.int64))
+    P, Tl, W, sP, S, st = bw._kbuf
+
+    def load():
+        m = len(bw.P)
+        P[:m], Tl[: m - 1] = bw.P, bw.Tl
+        if not (bw.W.base is W and bw.W.shape == (m, m)):
+            W[:m, :m] = bw.W
+        if not (bw.sP.base is sP and len(bw.sP) == m):
+            sP[:m] = bw.sP
+        st[0], st[1], st[2] = m, bw.since, 0
+
+    def store():
+        m = int(st[0])
+        bw.P, bw.Tl = P[:m].tolist(), Tl[: m - 1].tolist()
+        bw.W, bw.sP, bw.since = W[:m, :m], sP[:m], int(st[1])
+        bw._buffer.extend(S[i].copy() for i in range(int(st[2])))
+        st[2] = 0
+
+    load()
+    left = cap + 1
+    while left > 0:
+        before = int(st[1])
+        code = pivots(f.K, f.KF, f.y, g, kl, piv_tol, bw.limit, iu.REFACTOR, iu.REFACTOR_DIV,
+                      P, Tl, W, bw.KP, bw.KT, sP, bw.sJ, bw.covered, bw.unchecked, f.J, S,
+                      check_batch - len(bw._buffer), st, left)
+        done = int(st[1]) - before
+        bw.pivots += done
+        left -= done
+        store()
+        if code == OPTIMAL:
+            return "optimal"
+        if code == BROKEN:
+            return None
+        if code == REFACTOR:
+            if not bw._refactor() or not bw._note_vertex(bool(st[3])):
+                return None
+        elif code == FLUSH and not bw._flush():
+            return None
+        if code in (REACHED, BUDGET) or kl in bw.Tl:
+            return "reached" if kl in bw.Tl else "cap"
+        load()
+    return "cap"

@@ -1,0 +1,26 @@
+"""numba's ``njit`` where the compiled kernels are available, else a no-op decorator.
+
+``SHAKEDOWN_KERNEL=numpy`` (or ``python``, ``off``, ``0``) in the environment switches the
+compiled kernels off: the bounds engine's pivots (:mod:`shakedown.bounds.basis_kernel`,
+:mod:`shakedown.bounds.walk_kernel`) then run in NumPy, pivot for pivot the same rules.  The
+cyclic solver's kernels read the same switch through :mod:`shakedown.evolution.kernel_jit`,
+which also stamps their on-disk cache (those files may not import the package, so the switch
+is read there on its own).
+"""
+
+from __future__ import annotations
+
+import os
+
+try:  # pragma: no cover - which branch runs depends on the environment
+    if os.environ.get("SHAKEDOWN_KERNEL", "").lower() in ("numpy", "python", "off", "0"):
+        raise ImportError("disabled by SHAKEDOWN_KERNEL")
+    from numba import njit
+    HAVE_KERNEL = True
+except ImportError:  # pragma: no cover
+    HAVE_KERNEL = False
+
+    def njit(*args, **kwargs):  # noqa: D103 - the decorated functions are not called then
+        return (lambda fn: fn) if not (args and callable(args[0])) else args[0]
+
+__all__ = ["njit", "HAVE_KERNEL"]
