@@ -72,21 +72,15 @@ def advance(K, KF, mJ, y, c, star, lam2, tol, piv_tol, kl, cap, refactor, refact
         for i in range(m):
             sJ[T[i]] = 0.0
         # duals of the tight rows and reduced costs of the coordinates
+        for j in range(m):  # z = -W^T c_P, by rows of W (contiguous)
+            z[j] = 0.0
+        for i in range(m):
+            a = c[P[i]]
+            for j in range(m):
+                z[j] -= a * W[i, j]
         mz = 0.0
         for j in range(m):
-            acc = 0.0
-            for i in range(m):
-                acc -= W[i, j] * c[P[i]]
-            z[j] = acc
-            mz += mJ[T[j]] * acc
-        for e in range(ncol):
-            d[e] = c[e] + y[e] * mz
-        for j in range(m):
-            a = z[j]
-            for e in range(ncol):
-                d[e] += a * KT[j, e]
-        for i in range(m):
-            d[P[i]] = 0.0
+            mz += mJ[T[j]] * z[j]
         kpos = -1
         for j in range(m):
             if T[j] == kl:
@@ -122,10 +116,11 @@ def advance(K, KF, mJ, y, c, star, lam2, tol, piv_tol, kl, cap, refactor, refact
             for i in range(m):
                 rowq[i] = K[q, P[i]] + mJ[q] * y[P[i]]
             for j in range(m):
-                acc = 0.0
-                for i in range(m):
-                    acc += rowq[i] * W[i, j]
-                rho[j] = acc
+                rho[j] = 0.0
+            for i in range(m):
+                a = rowq[i]
+                for j in range(m):
+                    rho[j] += a * W[i, j]
             for e in range(ncol):
                 dc[e] = -(K[q, e] + mJ[q] * y[e])
             for j in range(m):
@@ -139,10 +134,17 @@ def advance(K, KF, mJ, y, c, star, lam2, tol, piv_tol, kl, cap, refactor, refact
         rm = 0.0
         for j in range(m):
             rm += rho[j] * mJ[T[j]]
+        # reduced costs d = c + z K_T + (mJ_T . z) y and the pivot row: one pass over K_T
+        for e in range(ncol):
+            d[e] = c[e] + y[e] * mz
         for j in range(m):
-            a = rho[j]
+            a, b = z[j], rho[j]
             for e in range(ncol):
-                dc[e] += a * KT[j, e]
+                kt = KT[j, e]
+                d[e] += a * kt
+                dc[e] += b * kt
+        for i in range(m):
+            d[P[i]] = 0.0
         if is_row:
             for e in range(ncol):
                 dc[e] += rm * y[e]
@@ -212,10 +214,11 @@ def advance(K, KF, mJ, y, c, star, lam2, tol, piv_tol, kl, cap, refactor, refact
             for i in range(m):
                 tmp[i] = rowq[i] - (KT[e, P[i]] + mJ[T[e]] * y[P[i]])
             for j in range(m):
-                acc = 0.0
-                for i in range(m):
-                    acc += tmp[i] * W[i, j]
-                ds[j] = acc
+                ds[j] = 0.0
+            for i in range(m):
+                a = tmp[i]
+                for j in range(m):
+                    ds[j] += a * W[i, j]
             den = 1.0 + ds[e]
             for i in range(m):
                 tmp[i] = W[i, e]

@@ -28,8 +28,8 @@ __all__ = ["HAVE_KERNEL", "pivots", "walk"]
 def pivots(K, KF, y, g, kl, piv_tol, limit, refactor, refactor_div, P, Tl, W, KP, KT, sP, sJ,
            covered, unchecked, Jrows, S, room, st, budget):  # pragma: no cover - compiled
     """Pivots of ``max g . sigma`` from the state ``(P, Tl, W, KP, KT, sP, sJ)`` with ``st =
-    [m, pivots since W was recomputed, vertices written to S, whether the last pivot changed
-    the tight rows]`` (updated in place), at most ``budget``; a code of this module."""
+    [m, pivots since W was recomputed, vertices written to S, whether the current vertex is
+    held]`` (updated in place), at most ``budget``; a code of this module."""
     nJ, ncol = K.shape
     z = np.empty(ncol)
     rc = np.empty(ncol)
@@ -41,11 +41,12 @@ def pivots(K, KF, y, g, kl, piv_tol, limit, refactor, refactor_div, P, Tl, W, KP
         m, since = st[0], st[1]
         nT = m - 1
         # pricing: reduced costs per unit of slack
-        for j in range(m):
-            acc = 0.0
-            for i in range(m):
-                acc += W[i, j] * g[P[i]]
-            z[j] = acc
+        for j in range(m):  # z = W^T g_P, by rows of W (contiguous)
+            z[j] = 0.0
+        for i in range(m):
+            a = g[P[i]]
+            for j in range(m):
+                z[j] += a * W[i, j]
         w = z[0]
         for e in range(ncol):
             rc[e] = g[e] - w * y[e]
@@ -132,6 +133,18 @@ def pivots(K, KF, y, g, kl, piv_tol, limit, refactor, refactor_div, P, Tl, W, KP
             is_row, q = (False, il) if cl >= cs else (True, is_)
         if is_row and nT + (1 if e >= 0 else 0) > limit:
             return BROKEN
+        if e < 0 and st[3] == 0 and not covered[Jrows[Tl[jj]]] and not unchecked[Jrows[Tl[jj]]]:
+            # row Tl[jj] is about to loosen: the vertex joins the batch (BarycentricWalk._hold)
+            v = st[2]
+            for c in range(ncol):
+                S[v, c] = 0.0
+            for i in range(m):
+                S[v, P[i]] = sP[i]
+            for i in range(nT):
+                unchecked[Jrows[Tl[i]]] = True
+            st[2], st[3] = v + 1, 1
+            if v + 1 >= room:
+                return FLUSH  # this pivot is taken again after the check
         # move to the adjacent vertex
         step = tmin
         for i in range(m):
@@ -181,10 +194,11 @@ def pivots(K, KF, y, g, kl, piv_tol, limit, refactor, refactor_div, P, Tl, W, KP
         elif e >= 0:  # column e and row q added: schur = -dS[q]
             schur = -dS[q]
             for j in range(m):  # cw = K[q, P] W
-                acc = 0.0
-                for i in range(m):
-                    acc += K[q, P[i]] * W[i, j]
-                z[j] = acc
+                z[j] = 0.0
+            for i in range(m):
+                a = K[q, P[i]]
+                for j in range(m):
+                    z[j] += a * W[i, j]
             for i in range(m):
                 a = -dP[i] / schur
                 for j in range(m):
@@ -205,10 +219,11 @@ def pivots(K, KF, y, g, kl, piv_tol, limit, refactor, refactor_div, P, Tl, W, KP
             for i in range(m):
                 col[i] = K[q, P[i]] - KT[jj, P[i]]
             for j in range(m):
-                acc = 0.0
-                for i in range(m):
-                    acc += col[i] * W[i, j]
-                z[j] = acc
+                z[j] = 0.0
+            for i in range(m):
+                a = col[i]
+                for j in range(m):
+                    z[j] += a * W[i, j]
             den = dS[q]
             for i in range(m):
                 col[i] = W[i, rr] / den
@@ -221,28 +236,10 @@ def pivots(K, KF, y, g, kl, piv_tol, limit, refactor, refactor_div, P, Tl, W, KP
                 KT[jj, c] = K[q, c]
         done += 1
         st[1] = since + 1
-        changed = e >= 0 or is_row
-        st[3] = 1 if changed else 0
+        st[3] = 0
         m = st[0]
         if st[1] >= max(refactor, m // refactor_div):
-            return REFACTOR  # the vertex is noted after the recomputation (Python)
-        if changed:
-            new = False
-            for i in range(m - 1):
-                if not covered[Jrows[Tl[i]]]:
-                    new = True
-                    break
-            if new:
-                v = st[2]
-                for c in range(ncol):
-                    S[v, c] = 0.0
-                for i in range(m):
-                    S[v, P[i]] = sP[i]
-                for i in range(m - 1):
-                    unchecked[Jrows[Tl[i]]] = True
-                st[2] = v + 1
-                if v + 1 >= room:
-                    return FLUSH
+            return REFACTOR
         for i in range(m - 1):
             if Tl[i] == kl:
                 return REACHED
@@ -265,6 +262,7 @@ def walk(bw, g, kl, cap, check_batch, piv_tol):
     def load():
         m = len(bw.P)
         P[:m], Tl[: m - 1] = bw.P, bw.Tl
+        st[3] = bw._held
         if not (bw.W.base is W and bw.W.shape == (m, m)):
             W[:m, :m] = bw.W
         if not (bw.sP.base is sP and len(bw.sP) == m):
@@ -274,7 +272,7 @@ def walk(bw, g, kl, cap, check_batch, piv_tol):
     def store():
         m = int(st[0])
         bw.P, bw.Tl = P[:m].tolist(), Tl[: m - 1].tolist()
-        bw.W, bw.sP, bw.since = W[:m, :m], sP[:m], int(st[1])
+        bw.W, bw.sP, bw.since, bw._held = W[:m, :m], sP[:m], int(st[1]), bool(st[3])
         bw._buffer.extend(S[i].copy() for i in range(int(st[2])))
         st[2] = 0
 
@@ -294,7 +292,7 @@ def walk(bw, g, kl, cap, check_batch, piv_tol):
         if code == BROKEN:
             return None
         if code == REFACTOR:
-            if not bw._refactor() or not bw._note_vertex(bool(st[3])):
+            if not bw._refactor():
                 return None
         elif code == FLUSH and not bw._flush():
             return None
