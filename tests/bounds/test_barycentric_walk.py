@@ -16,6 +16,7 @@ from test_bounds import random_problem
 from test_pruning import _unscreened_network, assert_fast_matches_full
 
 import shakedown as sd
+from shakedown.bounds import barycentric_walk as bwm
 from shakedown.bounds import inverse_updates as iu
 from shakedown.bounds import pruning
 from shakedown.bounds.barycentric_walk import UNCHECKED, BarycentricWalk, SimplexFrame
@@ -276,3 +277,65 @@ def test_a_drifted_vertex_is_recomputed_before_the_walk_gives_up():
     w.rJ = w.rJ - 1.0  # every row outside the lam2 basis moved in: the vertex violates them
     w._buffer.append(w._vertex() * 1.5)
     assert not w.flush() and w.broken
+
+
+@pytest.mark.parametrize("kernel", [False, True])
+def test_every_row_ever_tight_is_checked(kernel, monkeypatch):
+    """Issue 26: a vertex is checked only before a pivot loosens a tight row not yet covered
+    and where a walk ends, not after every pivot.  With the walk's record of covered rows wiped
+    before each target (so that every row that loosens is one not yet covered), each row must
+    be in the batch (or covered) when it loosens, every row tight at some vertex must end
+    covered (no check fails here), and fewer vertices are checked than visited; the compiled
+    walk covers the same rows as NumPy's."""
+    from shakedown.bounds import basis_lp
+
+    G, c, m, B, x2, lam2 = _problem(60, 3)
+    f = SimplexFrame.of(G, c, m, B, x2, lam2)
+    t = 0.95 * lam2
+    b = c + t * m
+
+    def run(compiled, spy=None, wipe=True):
+        monkeypatch.setattr(basis_lp, "KERNEL_MIN_N", 0 if compiled else 10**9)
+        w = BarycentricWalk(f, t, _vertex(G, b, 3))
+        assert w.ok
+        w.seen = []  # the rows covered after each target
+        for k in f.J:
+            if wipe:
+                w.covered[:] = False  # as if nothing had been checked yet
+                w._held = False
+            if spy is not None:
+                spy["start"].update(f.J[w.Tl])
+            w.walk_to(int(k), 500)
+            assert not w.broken
+            assert w.flush()
+            w.seen.append(w.covered.copy())
+            if spy is not None:
+                assert w.covered[sorted(spy["start"])].all()
+                spy["start"].clear()
+        return w
+
+    loosened, checked, tight = [], [], {"start": set()}
+    orig_update, orig_check = BarycentricWalk._update, bwm.batch_check
+
+    def update(self, kind, q, e, j, *args):
+        if e < 0:  # tight row Tl[j] loosens: it must be checked or in the batch
+            r = self.f.J[self.Tl[j]]
+            loosened.append(bool(self.covered[r] or self.unchecked[r]))
+        orig_update(self, kind, q, e, j, *args)
+        tight["start"].update(f.J[self.Tl])  # every vertex visited: its tight rows
+
+    def batch_check(G_, b_, X):
+        checked.append(len(X))
+        return orig_check(G_, b_, X)
+
+    monkeypatch.setattr(BarycentricWalk, "_update", update)
+    monkeypatch.setattr(bwm, "batch_check", batch_check)
+    ref = run(False, spy=tight)
+    assert len(loosened) >= 10 and all(loosened)
+    checked.clear()
+    plain = run(False, wipe=False)  # as the pruning walks: most vertices are not checked
+    assert sum(checked) < plain.pivots // 2
+    if kernel:
+        got = run(True)
+        assert got.pivots == ref.pivots
+        assert all(np.array_equal(u, v) for u, v in zip(got.seen, ref.seen, strict=True))
