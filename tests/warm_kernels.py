@@ -10,7 +10,32 @@ import shakedown as sd
 from shakedown.evolution.kernel_warm import warm_up
 
 
+def bounds_kernels() -> None:
+    """The bounds engine's compiled pivots (first: the bounds tests, which run first, use
+    them within seconds), with the kernels forced on for a small problem."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent / "bounds"))
+    from test_barycentric_walk import _problem, _vertex
+    from test_basis_lp import _setup
+    from test_single_simplex import _kachanov
+
+    from shakedown.bounds import basis_lp
+    from shakedown.bounds.barycentric_walk import BarycentricWalk, SimplexFrame
+
+    basis_lp.KERNEL_MIN_N = 0
+    f, tab, _ = _setup(*_kachanov(60, 3))
+    basis_lp.BasisLP(f, tab).solve(int(f.J[0]))
+    G, c, m, B, x2, lam2 = _problem(30, 1)
+    frame, t = SimplexFrame.of(G, c, m, B, x2, lam2), 0.9 * lam2
+    walk = BarycentricWalk(frame, t, _vertex(G, c + t * m, 1))
+    for k in frame.J[:8]:
+        walk.walk_to(int(k), 50)
+
+
 def main() -> None:
+    bounds_kernels()
     warm_up()  # the 2-D kernel, with the argument types of every real call
     rng = np.random.default_rng(0)
     n = 4
