@@ -50,13 +50,20 @@ def advance(K, KF, mJ, y, c, star, lam2, tol, piv_tol, kl, cap, refactor, refact
         m, it, since = st[0], st[1], st[2]
         if since >= max(refactor, m // refactor_div):
             return REFACTOR
-        # primal values of the basic coordinates and the dual bound
+        # primal values of the basic coordinates, the dual bound and (same pass over W) the
+        # duals z = -W^T c_P of the tight rows
         cs = 0.0
         ys = 0.0
+        for j in range(m):
+            tmp[j] = star[T[j]]
+            z[j] = 0.0
         for i in range(m):
             acc = 0.0
+            a = c[P[i]]
             for j in range(m):
-                acc += W[i, j] * star[T[j]]
+                w_ij = W[i, j]
+                acc += w_ij * tmp[j]
+                z[j] -= a * w_ij
             sP[i] = acc
             cs += c[P[i]] * acc
             ys += y[P[i]] * acc
@@ -71,13 +78,7 @@ def advance(K, KF, mJ, y, c, star, lam2, tol, piv_tol, kl, cap, refactor, refact
                 sJ[j] -= KP[j, i] * a
         for i in range(m):
             sJ[T[i]] = 0.0
-        # duals of the tight rows and reduced costs of the coordinates
-        for j in range(m):  # z = -W^T c_P, by rows of W (contiguous)
-            z[j] = 0.0
-        for i in range(m):
-            a = c[P[i]]
-            for j in range(m):
-                z[j] -= a * W[i, j]
+        # duals of the tight rows (z above) and their weighted sum
         mz = 0.0
         for j in range(m):
             mz += mJ[T[j]] * z[j]
