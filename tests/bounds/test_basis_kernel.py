@@ -13,9 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_basis_lp import _setup, _tensile_problem
-from test_bounds import random_problem
-from test_single_simplex import _kachanov
+from test_basis_lp import _tensile_problem
+from test_basis_lp_race import _frame as race_frame
 
 import shakedown as sd
 from shakedown.bounds import basis_kernel, basis_lp
@@ -26,13 +25,7 @@ pytestmark = pytest.mark.skipif(not basis_kernel.HAVE_KERNEL, reason="numba not 
 
 
 def _frame(case):
-    if case.startswith("random"):
-        system, load = random_problem(int(case[6:]), 1)
-    elif case.startswith("dup"):
-        system, load = random_problem(20, 2)
-    else:
-        system, load = _kachanov(int(case[8:]), 3)
-    return _setup(system, load, dup=case.startswith("dup"))
+    return race_frame(case, crack_seed=3)
 
 
 def _both(monkeypatch, lp, k, **kw):

@@ -20,13 +20,15 @@ from shakedown.bounds.basis_lp import BasisLP
 from shakedown.model.errors import InputError
 
 
-def _frame(case):
+def _frame(case, crack_seed=2):
+    """The frame of a named test problem: ``randomN``, ``dup20`` (every row twice) or
+    ``kachanovN`` (a network of ``N`` cracks drawn with ``crack_seed``)."""
     if case.startswith("random"):
         system, load = random_problem(int(case[6:]), 1)
     elif case.startswith("dup"):
         system, load = random_problem(20, 2)
     else:
-        system, load = _kachanov(int(case[8:]), 2)
+        system, load = _kachanov(int(case[8:]), crack_seed)
     return _setup(system, load, dup=case.startswith("dup"))
 
 
