@@ -174,13 +174,10 @@ class BarycentricWalk:
         M = np.empty((m, m))
         M[0] = self.f.y[P]
         M[1:] = K[np.ix_(Tl, P)]
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", sla.LinAlgWarning)
-            lu = sla.lu_factor(M, check_finite=False)
-        d = np.abs(np.diag(lu[0]))
-        if not d.min() > 1e-12 * d.max():
+        W = iu.inverse(M)
+        if W is None:
             return False
-        self.W = np.ascontiguousarray(sla.lu_solve(lu, np.eye(m), check_finite=False))
+        self.W = W
         self.KP[:, :m] = self.f.KF[:, P]
         self.KT[: m - 1] = K[Tl]
         self.since = 0

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..model.jit import HAVE_KERNEL, njit
+from ..model.jit import FAST, HAVE_KERNEL, njit
 from . import inverse_updates as iu
 from .certificates import DenseAnswer
 
@@ -28,7 +28,43 @@ BUDGET, REFACTOR, OPTIMAL, CAPPED, FAILED = 0, 1, 2, 3, 4
 __all__ = ["HAVE_KERNEL", "advance", "steps", "BUDGET", "REFACTOR", "OPTIMAL", "CAPPED", "FAILED"]
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=FAST)
+def _sub_cols(M, a, k, out):  # pragma: no cover - compiled
+    """``out -= M[:, :k] @ a[:k]`` (Fortran-order ``M``), four columns a pass over ``out``."""
+    n = out.size
+    i = 0
+    while i + 4 <= k:
+        a0, a1, a2, a3 = a[i], a[i + 1], a[i + 2], a[i + 3]
+        for r in range(n):
+            out[r] -= M[r, i] * a0 + M[r, i + 1] * a1 + M[r, i + 2] * a2 + M[r, i + 3] * a3
+        i += 4
+    for ic in range(i, k):
+        a0 = a[ic]
+        for r in range(n):
+            out[r] -= M[r, ic] * a0
+
+
+@njit(cache=True, fastmath=FAST)
+def _add_rows2(M, a, b, k, outa, outb):  # pragma: no cover - compiled
+    """``outa += a[:k] @ M[:k]`` and ``outb += b[:k] @ M[:k]`` (C-order ``M``) in one pass
+    over ``M``, two rows at a time."""
+    n = outa.size
+    j = 0
+    while j + 2 <= k:
+        a0, a1, b0, b1 = a[j], a[j + 1], b[j], b[j + 1]
+        for e in range(n):
+            m0, m1 = M[j, e], M[j + 1, e]
+            outa[e] += a0 * m0 + a1 * m1
+            outb[e] += b0 * m0 + b1 * m1
+        j += 2
+    if j < k:
+        a0, b0 = a[j], b[j]
+        for e in range(n):
+            outa[e] += a0 * M[j, e]
+            outb[e] += b0 * M[j, e]
+
+
+@njit(cache=True, fastmath=FAST)
 def advance(K, KF, mJ, y, c, star, lam2, tol, piv_tol, kl, cap, refactor, refactor_div,
             P, T, W, KP, KT, st, budget, out):  # pragma: no cover - compiled
     """Pivots of :meth:`.BasisLP._steps` from the state ``(P, T, W, KP, KT)`` with ``st =
@@ -72,10 +108,7 @@ def advance(K, KF, mJ, y, c, star, lam2, tol, piv_tol, kl, cap, refactor, refact
             return BUDGET
         for j in range(nJ):
             sJ[j] = star[j] - mJ[j] * ys
-        for i in range(m):
-            a = sP[i]
-            for j in range(nJ):
-                sJ[j] -= KP[j, i] * a
+        _sub_cols(KP, sP, m, sJ)
         for i in range(m):
             sJ[T[i]] = 0.0
         # duals of the tight rows (z above) and their weighted sum
@@ -138,12 +171,7 @@ def advance(K, KF, mJ, y, c, star, lam2, tol, piv_tol, kl, cap, refactor, refact
         # reduced costs d = c + z K_T + (mJ_T . z) y and the pivot row: one pass over K_T
         for e in range(ncol):
             d[e] = c[e] + y[e] * mz
-        for j in range(m):
-            a, b = z[j], rho[j]
-            for e in range(ncol):
-                kt = KT[j, e]
-                d[e] += a * kt
-                dc[e] += b * kt
+        _add_rows2(KT, z, rho, m, d, dc)
         for i in range(m):
             d[P[i]] = 0.0
         if is_row:

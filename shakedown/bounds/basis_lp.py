@@ -23,11 +23,9 @@ clipped to zero for the costs; an optimum that then fails the dual-sign check is
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import replace
 
 import numpy as np
-import scipy.linalg as sla
 
 from ..model.errors import InputError
 from . import basis_kernel as bk
@@ -96,15 +94,7 @@ class BasisLP:
         return self.K[np.ix_(T, P)] + np.outer(self.mJ[T], self.f.y[P])
 
     def _inverse(self, P, T):
-        if not P:
-            return np.zeros((0, 0))
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", sla.LinAlgWarning)
-            lu = sla.lu_factor(self._M(P, T), check_finite=False)
-        d = np.abs(np.diag(lu[0]))
-        if not d.min() > 1e-12 * d.max():
-            return None
-        return np.ascontiguousarray(sla.lu_solve(lu, np.eye(len(P)), check_finite=False))
+        return iu.inverse(self._M(P, T)) if P else np.zeros((0, 0))
 
     def solve(self, k: int | None, max_pivots: int | None = None) -> DenseAnswer | None:
         """The answer for row ``k`` (``None`` for a row of the basis: ``lam_high = lam2``;
@@ -351,13 +341,13 @@ class BasisLP:
         """The optimum in ``v`` with its multipliers on the tableau's rows, certified there
         (``verify=False``: status ``"unverified"``, for :meth:`_certify`)."""
         f, tab = self.f, self.tab
-        W = self._inverse(P, T) if P else W  # fresh values for the answer
-        if W is None:
+        lu = iu.factor(self._M(P, T)) if P else None  # fresh values for the answer
+        if P and lu is None:
             return self._failed(it)
-        sP = W @ self.star[T] if P else np.zeros(0)
+        sP = iu.solve(lu, self.star[T]) if P else np.zeros(0)
         v = f.x2 - sP @ f.ET[P] if P else f.x2.copy()
         lam = f.lam2 - (float(f.y[P] @ sP) if P else 0.0)
-        z = -(W.T @ f.y[P]) if P else np.zeros(0)  # the true costs now
+        z = -iu.solve(lu, f.y[P], trans=True) if P else np.zeros(0)  # the true costs now
         d = f.y + ((z @ self.K[T]) + f.y * float(self.mJ[T] @ z) if P else 0.0)
         nb = np.ones(len(f.B), bool)
         nb[P] = False

@@ -22,6 +22,38 @@ REFACTOR = 50
 REFACTOR_DIV = 4
 
 
+#: A working basis whose LU factor has a pivot below this fraction of its largest counts as
+#: singular (:func:`factor`).
+SINGULAR = 1e-12
+
+
+def factor(M):
+    """The LU factorisation ``(lu, piv)`` of the square ``M`` (LAPACK ``getrf``), ``None`` if a
+    pivot falls below :data:`SINGULAR` of the largest."""
+    lu, piv, info = sla.lapack.dgetrf(M)
+    d = np.abs(np.diag(lu))
+    if info < 0 or not d.size or not d.min() > SINGULAR * d.max():
+        return None
+    return lu, piv
+
+
+def inverse(M):
+    """``M^-1`` (C-order) from :func:`factor` and LAPACK ``getri`` (a third cheaper than
+    solving for the identity: issue 26, ``m = 600``, 19 against 29 ms), ``None`` where
+    :func:`factor` is."""
+    f = factor(M)
+    if f is None:
+        return None
+    lwork = int(sla.lapack.dgetri_lwork(len(M))[0])
+    W, info = sla.lapack.dgetri(f[0], f[1], lwork=max(lwork, 1), overwrite_lu=1)
+    return np.ascontiguousarray(W) if info == 0 else None
+
+
+def solve(f, b, trans=False):
+    """``M^-1 b`` (``trans``: ``M^-T b``) with ``f = factor(M)``."""
+    return sla.lu_solve(f, b, trans=1 if trans else 0, check_finite=False)
+
+
 def refactor_due(since: int, m: int) -> bool:
     """Whether an ``m``-square explicit inverse updated ``since`` times is due for a
     recomputation from scratch (:data:`REFACTOR`, :data:`REFACTOR_DIV`)."""

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..model.jit import HAVE_KERNEL, njit
+from ..model.jit import FAST, HAVE_KERNEL, njit
 from . import inverse_updates as iu
 
 #: What :func:`pivots` returns: the budget spent, ``W`` due for a recomputation, the batch of
@@ -24,7 +24,39 @@ BUDGET, REFACTOR, FLUSH, REACHED, OPTIMAL, BROKEN = 0, 1, 2, 3, 4, 5
 __all__ = ["HAVE_KERNEL", "pivots", "walk"]
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=FAST)
+def _sub_rows(M, a, k, out):  # pragma: no cover - compiled
+    """``out -= a[:k] @ M[:k]`` (C-order ``M``), four rows a pass over ``out``."""
+    n = out.size
+    j = 0
+    while j + 4 <= k:
+        a0, a1, a2, a3 = a[j], a[j + 1], a[j + 2], a[j + 3]
+        for e in range(n):
+            out[e] -= a0 * M[j, e] + a1 * M[j + 1, e] + a2 * M[j + 2, e] + a3 * M[j + 3, e]
+        j += 4
+    for jr in range(j, k):
+        a0 = a[jr]
+        for e in range(n):
+            out[e] -= a0 * M[jr, e]
+
+
+@njit(cache=True, fastmath=FAST)
+def _sub_cols(M, a, k, out):  # pragma: no cover - compiled
+    """``out -= M[:, :k] @ a[:k]`` (Fortran-order ``M``), four columns a pass over ``out``."""
+    n = out.size
+    i = 0
+    while i + 4 <= k:
+        a0, a1, a2, a3 = a[i], a[i + 1], a[i + 2], a[i + 3]
+        for r in range(n):
+            out[r] -= M[r, i] * a0 + M[r, i + 1] * a1 + M[r, i + 2] * a2 + M[r, i + 3] * a3
+        i += 4
+    for ic in range(i, k):
+        a0 = a[ic]
+        for r in range(n):
+            out[r] -= M[r, ic] * a0
+
+
+@njit(cache=True, fastmath=FAST)
 def pivots(K, KF, y, g, kl, piv_tol, limit, refactor, refactor_div, P, Tl, W, KP, KT, sP, sJ,
            covered, unchecked, Jrows, S, room, st, budget):  # pragma: no cover - compiled
     """Pivots of ``max g . sigma`` from the state ``(P, Tl, W, KP, KT, sP, sJ)`` with ``st =
@@ -50,10 +82,7 @@ def pivots(K, KF, y, g, kl, piv_tol, limit, refactor, refactor_div, P, Tl, W, KP
         w = z[0]
         for e in range(ncol):
             rc[e] = g[e] - w * y[e]
-        for j in range(nT):
-            a = z[1 + j]
-            for e in range(ncol):
-                rc[e] -= a * KT[j, e]
+        _sub_rows(KT, z[1:], nT, rc)
         for i in range(m):
             rc[P[i]] = 0.0
         scale = 1e-300
@@ -93,10 +122,7 @@ def pivots(K, KF, y, g, kl, piv_tol, limit, refactor, refactor_div, P, Tl, W, KP
                 dP[i] = -W[i, 1 + jj]
             for r in range(nJ):
                 dS[r] = 0.0
-        for i in range(m):
-            a = dP[i]
-            for r in range(nJ):
-                dS[r] -= KP[r, i] * a
+        _sub_cols(KP, dP, m, dS)
         for i in range(nT):
             dS[Tl[i]] = 0.0
         if e < 0:
