@@ -325,7 +325,7 @@ def steps(lp, k, kl, max_pivots, KP, KT, piv_tol, verify=True, chunk=None):
             last = it
             yield float(out[0]), it
         elif code == REFACTOR:
-            Wn = lp._inverse(list(P[:m]), list(T[:m]))
+            Wn = lp._inverse(P[:m], T[:m], KT)
             if Wn is None:
                 return lp._failed(it)
             W[:m, :m] = Wn

@@ -69,8 +69,15 @@ def test_recomputed_inverses_and_caps(monkeypatch):
     monkeypatch.setattr(iu, "REFACTOR_DIV", 1)
     inverses = []
     orig = BasisLP._inverse
-    monkeypatch.setattr(BasisLP, "_inverse", lambda self, P, T: inverses.append(len(P))
-                        or orig(self, P, T))
+    gathers = []
+
+    def inverse(self, P, T, KT=None):  # the basis gathered from the LP's K[T] rows is K's
+        inverses.append(len(P))
+        if KT is not None:
+            gathers.append(np.array_equal(self._M(P, T, KT), self._M(P, T)))
+        return orig(self, P, T, KT)
+
+    monkeypatch.setattr(BasisLP, "_inverse", inverse)
     deep = 0
     for k in f.J[::3]:
         ref, got = _both(monkeypatch, lp, int(k))
@@ -87,6 +94,7 @@ def test_recomputed_inverses_and_caps(monkeypatch):
         lp.solve(int(k))
         counts.append(list(inverses))
     assert counts[0] == counts[1] and len(counts[1]) > 2
+    assert gathers and all(gathers)
 
 
 def test_race_and_wrong_costs(monkeypatch):
