@@ -19,12 +19,9 @@ reports the point unusable (``None``) and the caller falls back to exact LPs.
 
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
-import scipy.linalg as sla
 
-from .inverse_updates import rank1
+from .inverse_updates import inverse, rank1
 
 #: Feasibility / tightness tolerance of a certificate point (relative to the row scale).
 WALK_TOL = 1e-9
@@ -87,13 +84,10 @@ class FacetWalk:
         self.ok = len(self.T) == self.n and self._reinvert() and self._certify()
 
     def _reinvert(self) -> bool:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", sla.LinAlgWarning)
-            lu = sla.lu_factor(self.G[self.T], check_finite=False)
-        d = np.abs(np.diag(lu[0]))
-        if not d.size or not d.min() > 1e-12 * d.max():
+        Binv = inverse(self.G[self.T])
+        if Binv is None:
             return False
-        self.Binv = np.ascontiguousarray(sla.lu_solve(lu, np.eye(self.n), check_finite=False))
+        self.Binv = Binv
         self.reinversions += 1
         self.x = self.Binv @ self.b[self.T]
         self.inb = np.zeros(self.R, bool)
