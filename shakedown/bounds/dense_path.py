@@ -323,7 +323,7 @@ def _min_start(A, b, e, tab, lamrow, book):
     swapped in, cleaned up by one dual simplex solve; ``None`` if that fails."""
     T1 = tab.T0.copy()
     if lamrow not in T1:
-        T1[int(np.argmax(np.abs(tab.W[:, lamrow])))] = lamrow
+        T1[int(np.argmax(np.abs(tab.columns([lamrow])[:, 0])))] = lamrow
     tab0 = dense_lp.Tableau(A, b, -e, T1)
     if tab0.singular:
         return None

@@ -18,7 +18,10 @@ by bordering (a new position) or a rank-one update (a position changed again) an
 from ``H`` every :data:`REINVERT_EVERY` pivots (periodic reinversion).  One pivot costs
 ``O(k n)`` for ``alpha`` plus one row of ``A B^-1`` (``O(n R)``, a matrix product for all LPs
 of a round), vectorised over the LPs: no Python loop over earlier pivots.  Memory is
-``O(L (k n + R))`` for the ``L`` LPs of a chunk, whatever the total number of LPs.
+``O(L (k n + R))`` for the ``L`` LPs of a chunk, whatever the total number of LPs.  A run of
+one or two LPs (a crossover, the ``min lam`` start) takes its first products from the LU factor
+of ``B0`` instead (:data:`LAZY_LPS`): most end in a few pivots, where forming ``W`` would cost
+more than all of them.
 """
 
 from __future__ import annotations
@@ -35,6 +38,12 @@ from .certificates import CERT_TOL, FEAS_TOL, PIVOT_TOL, DenseAnswer, batch_resi
 REINVERT_EVERY = 16
 #: Bytes of working storage per chunk of LPs solved together.
 CHUNK_BYTES = 2**27
+#: A run of at most this many LPs starts without the tableau ``W`` (:meth:`Tableau.columns`,
+#: :meth:`Tableau.times_w`): its products come from the LU factor, ``O(n^2 + R n)`` each,
+#: until :data:`LAZY_PRODUCTS` of them have been asked for; then ``W`` (``O(n^2 R)``) is formed.
+#: Issue 26, 2000-crack networks: a crossover of 0-2 pivots and the ``min lam`` start each
+#: formed a tableau of ~1.4 s for it.
+LAZY_LPS, LAZY_PRODUCTS = 2, 64
 
 
 class Tableau:
@@ -82,6 +91,33 @@ class Tableau:
     def W(self):
         """``A_T0^-T A^T``, shape (n, R): column ``i`` = row ``i`` in basis coordinates."""
         return self.Binv.T @ self.A.T
+
+    def _lazy(self) -> bool:
+        """Whether the next product is taken from the LU factor (``W`` not formed, fewer than
+        :data:`LAZY_PRODUCTS` asked for so far)."""
+        if "W" in self.__dict__ or getattr(self, "_products", 0) >= LAZY_PRODUCTS:
+            return False
+        self._products = getattr(self, "_products", 0) + 1
+        return True
+
+    def columns(self, p):
+        """``W[:, p]`` (shape ``(n, len(p))``), from the LU factor while :meth:`_lazy`."""
+        if self._lazy():
+            return sla.lu_solve(self._lu, self.A[p].T, trans=1, check_finite=False)
+        return self.W[:, p]
+
+    def times_w(self, U):
+        """``U @ W`` (``U`` of shape ``(l, n)``), from the LU factor while :meth:`_lazy`."""
+        if self._lazy():
+            return (self.A @ sla.lu_solve(self._lu, U.T, check_finite=False)).T
+        return U @ self.W
+
+    def basic(self, C):
+        """``C @ B^-T`` (each row of ``C`` solved with ``A_T0``), from the LU factor unless the
+        inverse is formed."""
+        if "Binv" in self.__dict__:
+            return C @ self.Binv.T
+        return sla.lu_solve(self._lu, C.T, check_finite=False).T
 
     @functools.cached_property
     def x0(self):  # the basic solution, shape (n,); act0 = A x0, shape (R,)
@@ -211,7 +247,9 @@ class _State:
 
 def _batch(tab, eqs, max_pivots, width, on_answer, skip, stop=None):  # noqa: C901
     n = tab.n
-    A, b, W = tab.A, tab.b, tab.W
+    A, b = tab.A, tab.b
+    if len(eqs) > LAZY_LPS:
+        tab.W  # noqa: B018 - many LPs: the tableau pays at once
     tolx = FEAS_TOL * tab.scale_x
     st = _State(tab, cap=min(16, n))
     answers = [None] * len(eqs)
@@ -249,7 +287,7 @@ def _batch(tab, eqs, max_pivots, width, on_answer, skip, stop=None):  # noqa: C9
         corr[np.arange(ku)[None, :] >= st.k[mask][:, None]] = 0.0
         np.add.at(c, (np.repeat(np.arange(c.shape[0]), ku), st.pos[mask, :ku].ravel()),
                   -corr.ravel())
-        X = c @ tab.Binv.T
+        X = tab.basic(c)
         m = len(ids)
         Y = np.zeros((m, tab.R))
         np.add.at(Y, (np.repeat(np.arange(m), n), bas.ravel()), (y * sgn).ravel())
@@ -302,7 +340,7 @@ def _batch(tab, eqs, max_pivots, width, on_answer, skip, stop=None):  # noqa: C9
         zero_eq = ~(has_eq | vin)
         sp = np.where(st.eqmask[idx, p] & (st.act[idx, p] < b[p]), -1.0, 1.0)  # entering sign
         # ---- alpha = B^-T (sp a_p) = w - H^T S^-T w[P]
-        w = W[:, p].T * sp[:, None]
+        w = tab.columns(p).T * sp[:, None]
         ku = st.ku
         g = np.matmul(st.gather(w, ku)[:, None, :], st.Sinv[:, :ku, :ku])  # (S^-T w[P])^T
         alpha = w - np.matmul(g, st.H[:, :ku, :])[:, 0, :]
@@ -340,7 +378,7 @@ def _batch(tab, eqs, max_pivots, width, on_answer, skip, stop=None):  # noqa: C9
         u = np.zeros((l, n))
         u[idx, r] = 1.0
         np.add.at(u, (np.repeat(idx, ku), st.pos[:, :ku].ravel()), -h.ravel())
-        st.act -= s[:, None] * (u @ W)
+        st.act -= s[:, None] * tab.times_w(u)
         # ---- dual and basis update
         st.y -= t_dual[:, None] * alpha
         st.y[idx, r] = t_dual
