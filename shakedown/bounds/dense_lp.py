@@ -51,12 +51,18 @@ def _primal_finish(A, b, e, tab, cap=None):
     is primal feasible but not dual feasible (a stalled interior point names the right face but
     a slightly wrong basis); ``None`` if the start is not a certified feasible vertex or the walk
     does not end at an optimum.  The caller certifies the answer again."""
-    from .facet_walk import FacetWalk
+    from .facet_walk import FacetWalk, certified_rows
 
+    # the start's vertex checked first from the tableau's LU (what the walk would check after
+    # forming and, on failure, re-forming B^-1: issue 26, a 2000-crack network's identified
+    # basis violated rows and the walk spent 1.3 s finding out)
+    tight = certified_rows(tab.A, tab.b, tab.x0, Gx=tab.act0)
+    if tight is None or not tight[tab.T0].all():
+        return None
     walk = FacetWalk(tab.A, tab.b, tab.T0)
     if not walk.ok or not walk.maximise(e, cap or max(60, tab.n)):
         return None
-    out = Tableau(A, b, e, np.sort(walk.T))
+    out = Tableau(A, b, e, np.sort(walk.T), like=tab)
     return out if not out.singular and out.dual_feasible else None
 
 
@@ -129,7 +135,7 @@ def _crossover(A, b, e, T, As, s, z, it):
         missing = n - len(strongly_active(z, s, n))
         if first is not None and not first.singular and missing > COMPLETION_LP_MAX:
             # a completion LP nearly as large as the LP itself: the identified basis first
-            ans, out = finish_from(A, b, e, Tableau(A, b, e, first.T0), it)
+            ans, out = finish_from(A, b, e, Tableau(A, b, e, first.T0, like=first), it)
             if ans is not None:
                 return ans, out
             first = None  # (tried)
@@ -138,7 +144,7 @@ def _crossover(A, b, e, T, As, s, z, it):
         T = complete_basis(As, z, s, e, n)
         if T is None:
             return finish_from(A, b, e, first, it)
-        tab = completed = Tableau(A, b, e, T)
+        tab = completed = Tableau(A, b, e, T, like=first)
         ymax = max(float(np.abs(tab.y0).max()), np.finfo(float).tiny)
         if not tab.singular and tab.y0.min() >= -1e-6 * ymax:
             # multipliers that are zero up to the interior point's accuracy; the final
@@ -152,7 +158,7 @@ def _crossover(A, b, e, T, As, s, z, it):
     if ans.status != "optimal":
         return _finish_any(A, b, e, (completed, first), it)
     if ans.iterations:
-        tab = Tableau(A, b, e, ans.basis)
+        tab = Tableau(A, b, e, ans.basis, like=tab)
     out = _optimal_basis(A, b, e, ans, tab, ans.iterations + it)
     if out[0] is not None:
         return out
@@ -179,7 +185,7 @@ def _optimal_basis(A, b, e, ans, tab, pivots):
         ans = batch_dual_simplex(tab, [()])[0]  # certify (0 pivots at an optimum)
         pivots += ans.iterations
         if ans.iterations:
-            tab = Tableau(A, b, e, ans.basis)
+            tab = Tableau(A, b, e, ans.basis, like=tab)
     if ans.status != "optimal" or tab.singular or not tab.dual_feasible:
         return None, None
     return DenseAnswer(ans.status, ans.x, ans.y, ans.basis, pivots, ans.residuals), tab
@@ -200,7 +206,7 @@ def _finish_any(A, b, e, starts, it):
         if t is None or t.singular or tuple(t.T0) in seen:
             continue
         seen.add(tuple(t.T0))
-        ans, tab = finish_from(A, b, e, Tableau(A, b, e, t.T0), it)  # (a fresh y0: clamped)
+        ans, tab = finish_from(A, b, e, Tableau(A, b, e, t.T0, like=t), it)  # (a fresh y0: clamped)
         if ans is not None:
             return ans, tab
     return None, None
@@ -233,7 +239,7 @@ def finish_from(A, b, e, tab, it=0):
     tab.y0 = np.maximum(tab.y0, 0.0)  # (a start only: the answer is certified)
     ans = single_dual_simplex(tab)
     pivots = ans.iterations
-    tab = Tableau(A, b, e, np.sort(ans.basis))
+    tab = Tableau(A, b, e, np.sort(ans.basis), like=tab)
     if tab.singular:
         return None, None
     # (also when the dual simplex certified its final basis to CERT_TOL with a multiplier

@@ -236,7 +236,7 @@ def _lam2_by_highs(A, b, e, book, why):
     else:
         main = dense_lp.batch_dual_simplex(tab, [()])[0]  # certify (no pivot at an optimum)
         if main.iterations:
-            tab = dense_lp.Tableau(A, b, e, main.basis)
+            tab = dense_lp.Tableau(A, b, e, main.basis, like=tab)
     if main is None or main.status != "optimal" or tab.singular:
         return None, None
     book.log.handover = None
@@ -324,7 +324,7 @@ def _min_start(A, b, e, tab, lamrow, book):
     T1 = tab.T0.copy()
     if lamrow not in T1:
         T1[int(np.argmax(np.abs(tab.columns([lamrow])[:, 0])))] = lamrow
-    tab0 = dense_lp.Tableau(A, b, -e, T1)
+    tab0 = dense_lp.Tableau(A, b, -e, T1, like=tab)
     if tab0.singular:
         return None
     start = dense_lp.batch_dual_simplex(tab0, [()])[0]
@@ -332,5 +332,5 @@ def _min_start(A, b, e, tab, lamrow, book):
     if start.status != "optimal":
         return None
     if start.iterations:
-        tab0 = dense_lp.Tableau(A, b, -e, start.basis)
+        tab0 = dense_lp.Tableau(A, b, -e, start.basis, like=tab0)
     return None if tab0.singular else tab0
