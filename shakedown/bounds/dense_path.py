@@ -332,5 +332,5 @@ def _min_start(A, b, e, tab, lamrow, book):
     if start.status != "optimal":
         return None
     if start.iterations:
-        tab0 = dense_lp.Tableau(A, b, -e, start.basis, like=tab0)
+        tab0 = tab0.rebased(start.basis)
     return None if tab0.singular else tab0

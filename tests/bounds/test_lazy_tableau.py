@@ -132,3 +132,35 @@ def test_interior_point_stops_a_stall_near_its_tolerance(monkeypatch):
     inf = np.full(A.shape[1], np.inf)
     ref = ReusableLP(A, np.full(len(b), -np.inf), b, -inf, inf, e).solve()
     assert ans.status == "optimal" and ans.x[-1] == pytest.approx(ref.objective, rel=1e-9)
+
+
+def test_rebased_tableau_equals_a_fresh_one_and_refuses_a_wrong_update(monkeypatch):
+    """``rebased``: the tableau after the ``min lam`` start's pivots from the start's by the
+    Woodbury formula equals a fresh one (measured 1e-13 here, 4e-11 at N = 2000); a start
+    tableau with a corrupted column is refused by the identity check (the new tableau is then
+    formed afresh on use), and so is an update of too many positions."""
+    A, b, e = _kachanov_lp(60, 0.15, 5, 0.6)
+    ans, tab = dense_lp.solve_max(A, b, e)
+    lamrow = A.shape[0] - 1
+    T1 = tab.T0.copy()
+    T1[int(np.argmax(np.abs(tab.columns([lamrow])[:, 0])))] = lamrow
+    t0 = dual_simplex.Tableau(A, b, -e, T1, like=tab)
+    t0.W  # noqa: B018 (formed)
+    start = dense_lp.batch_dual_simplex(t0, [()])[0]
+    changed = np.count_nonzero(start.basis != t0.T0)
+    assert 3 < changed <= dual_simplex.REBASE_FRACTION * t0.n
+    fresh = dual_simplex.Tableau(A, b, -e, start.basis)
+    new = t0.rebased(start.basis)
+    assert "W" in vars(new)
+    np.testing.assert_allclose(new.W, fresh.W, rtol=0, atol=1e-10)
+    np.testing.assert_array_equal(new.y0, fresh.y0)
+    out = dense_lp.batch_dual_simplex(new, [(k,) for k in range(0, lamrow, 5)])
+    ref = dense_lp.batch_dual_simplex(fresh, [(k,) for k in range(0, lamrow, 5)])
+    for a, r in zip(out, ref, strict=True):
+        assert a.status == r.status and a.iterations == r.iterations
+    bad = dual_simplex.Tableau(A, b, -e, T1, like=tab)
+    bad.W = t0.W.copy()
+    bad.W[:, start.basis[start.basis != t0.T0][0]] += 1e-6
+    assert "W" not in vars(bad.rebased(start.basis))
+    monkeypatch.setattr(dual_simplex, "REBASE_FRACTION", 0.5 * changed / t0.n)
+    assert "W" not in vars(t0.rebased(start.basis))
