@@ -18,8 +18,13 @@ import scipy.linalg as sla
 #: ``REFACTOR``, and ``m // REFACTOR_DIV`` for an ``m``-square basis: a recomputation costs
 #: ``O(m^3)``, a pivot ``O(N m)`` (issue 26, N = 2000 crack networks: m ~ 600-940, a
 #: recomputation ~85 ms against ~5 ms per pivot; every 50 pivots it was a fifth of the walks).
+#: ``m // 2`` since the pivots run compiled (a walk pivot ~1.1 ms at ``m`` ~ 600, a
+#: recomputation ~35 ms): the ``lam_high`` stage of the 2000-crack network i = 11 with the same
+#: pivots 116.1 s against 122.2 s side by side (i = 2: 75.4 against 79.0 s), the walk's inverse
+#: off its recomputation by at most 2.5e-11 of its largest entry (median 1.6e-13) against
+#: 2.0e-11 (1.0e-13) every ``m // 4``.
 REFACTOR = 50
-REFACTOR_DIV = 4
+REFACTOR_DIV = 2
 
 
 #: A working basis whose LU factor has a pivot below this fraction of its largest counts as

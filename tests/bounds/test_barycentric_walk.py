@@ -226,7 +226,7 @@ def test_working_inverse_recomputed_when_due(monkeypatch):
     :func:`refactor_due` says (every ``REFACTOR`` pivots on small bases, ``m / REFACTOR_DIV``
     on large ones), and the one updated in between agrees with it."""
     assert not iu.refactor_due(49, 10) and iu.refactor_due(50, 10)
-    assert not iu.refactor_due(199, 800) and iu.refactor_due(200, 800)
+    assert not iu.refactor_due(399, 800) and iu.refactor_due(400, 800)
     monkeypatch.setattr(iu, "REFACTOR", 3)
     G, c, m, B, x2, lam2 = _problem(30, 1)
     f = SimplexFrame.of(G, c, m, B, x2, lam2)
