@@ -228,6 +228,7 @@ def test_working_inverse_recomputed_when_due(monkeypatch):
     assert not iu.refactor_due(49, 10) and iu.refactor_due(50, 10)
     assert not iu.refactor_due(399, 800) and iu.refactor_due(400, 800)
     monkeypatch.setattr(iu, "REFACTOR", 3)
+    monkeypatch.setattr(iu, "REFACTOR_DIV", 4)  # (recomputations often enough to count here)
     G, c, m, B, x2, lam2 = _problem(30, 1)
     f = SimplexFrame.of(G, c, m, B, x2, lam2)
     t = 0.9 * lam2
