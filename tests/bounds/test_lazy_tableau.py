@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from shakedown import dense_lp
-from shakedown.bounds import dual_simplex, facet_walk, ipm
+from shakedown.bounds import dual_simplex, facet_walk, ipm, tableau
 
 
 def _kachanov_lp(n_cracks, density, seed, friction):
@@ -38,7 +38,7 @@ def test_lazy_products_equal_the_formed_tableau():
     np.testing.assert_allclose(lazy.times_w(U), U @ full.W, rtol=1e-10, atol=1e-12)
     np.testing.assert_allclose(lazy.basic(C), C @ full.Binv.T, rtol=1e-10, atol=1e-12)
     assert not {"W", "Binv"} & set(vars(lazy))
-    for _ in range(dual_simplex.LAZY_PRODUCTS):
+    for _ in range(tableau.LAZY_PRODUCTS):
         lazy.columns(p)
     assert "W" in vars(lazy)  # the products' budget spent: the tableau is formed
 
@@ -54,7 +54,7 @@ def test_one_lp_without_the_tableau_takes_the_same_pivots(monkeypatch):
     T1[int(np.argmax(np.abs(tab.columns([lamrow])[:, 0])))] = lamrow
     runs = []
     for budget in (10**6, 0):
-        monkeypatch.setattr(dual_simplex, "LAZY_PRODUCTS", budget)
+        monkeypatch.setattr(tableau, "LAZY_PRODUCTS", budget)
         t = dual_simplex.Tableau(A, b, -e, T1, like=tab)
         runs.append((dense_lp.batch_dual_simplex(t, [()])[0], t))
     (lazy, tl), (full, tf) = runs
@@ -148,7 +148,7 @@ def test_rebased_tableau_equals_a_fresh_one_and_refuses_a_wrong_update(monkeypat
     t0.W  # noqa: B018 (formed)
     start = dense_lp.batch_dual_simplex(t0, [()])[0]
     changed = np.count_nonzero(start.basis != t0.T0)
-    assert 3 < changed <= dual_simplex.REBASE_FRACTION * t0.n
+    assert 3 < changed <= tableau.REBASE_FRACTION * t0.n
     fresh = dual_simplex.Tableau(A, b, -e, start.basis)
     new = t0.rebased(start.basis)
     assert "W" in vars(new)
@@ -162,5 +162,5 @@ def test_rebased_tableau_equals_a_fresh_one_and_refuses_a_wrong_update(monkeypat
     bad.W = t0.W.copy()
     bad.W[:, start.basis[start.basis != t0.T0][0]] += 1e-6
     assert "W" not in vars(bad.rebased(start.basis))
-    monkeypatch.setattr(dual_simplex, "REBASE_FRACTION", 0.5 * changed / t0.n)
+    monkeypatch.setattr(tableau, "REBASE_FRACTION", 0.5 * changed / t0.n)
     assert "W" not in vars(t0.rebased(start.basis))
