@@ -25,6 +25,14 @@ def _kachanov_lp(n_cracks, density, seed, friction):
     return A, np.r_[cs.c, 0.0], np.r_[np.zeros(n), 1.0]
 
 
+def _min_lam_start(tab):
+    """The ``lam2`` basis with the row ``lam >= 0`` swapped in (as :func:`.dense_path._min_start`)."""
+    lamrow = tab.R - 1
+    T1 = tab.T0.copy()
+    T1[int(np.argmax(np.abs(tab.columns([lamrow])[:, 0])))] = lamrow
+    return lamrow, T1
+
+
 def test_lazy_products_equal_the_formed_tableau():
     """``columns``, ``times_w`` and ``basic`` from the LU factor equal the products with ``W``
     and ``B^-1``; after ``LAZY_PRODUCTS`` of them the tableau is formed and used."""
@@ -49,9 +57,7 @@ def test_one_lp_without_the_tableau_takes_the_same_pivots(monkeypatch):
     certified; with few pivots the tableau is never formed."""
     A, b, e = _kachanov_lp(60, 0.15, 5, 0.6)
     ans, tab = dense_lp.solve_max(A, b, e)
-    lamrow = A.shape[0] - 1
-    T1 = tab.T0.copy()
-    T1[int(np.argmax(np.abs(tab.columns([lamrow])[:, 0])))] = lamrow
+    lamrow, T1 = _min_lam_start(tab)
     runs = []
     for budget in (10**6, 0):
         monkeypatch.setattr(tableau, "LAZY_PRODUCTS", budget)
@@ -96,9 +102,7 @@ def test_primal_finish_checks_its_start_before_walking(monkeypatch):
     monkeypatch.setattr(facet_walk, "FacetWalk", spy)
     # the lam2 basis with the row lam >= 0 swapped in: the vertex lam = 0 of another corner,
     # which violates rows of H (the start of the "min lam" LPs is dual, not primal, feasible)
-    lamrow = A.shape[0] - 1
-    T1 = tab.T0.copy()
-    T1[int(np.argmax(np.abs(tab.columns([lamrow])[:, 0])))] = lamrow
+    lamrow, T1 = _min_lam_start(tab)
     bad = dual_simplex.Tableau(A, b, e, T1, like=tab)
     assert facet_walk.certified_rows(bad.A, bad.b, bad.x0) is None
     assert dense_lp._primal_finish(A, b, e, bad) is None and walks == []
@@ -141,9 +145,7 @@ def test_rebased_tableau_equals_a_fresh_one_and_refuses_a_wrong_update(monkeypat
     formed afresh on use), and so is an update of too many positions."""
     A, b, e = _kachanov_lp(60, 0.15, 5, 0.6)
     ans, tab = dense_lp.solve_max(A, b, e)
-    lamrow = A.shape[0] - 1
-    T1 = tab.T0.copy()
-    T1[int(np.argmax(np.abs(tab.columns([lamrow])[:, 0])))] = lamrow
+    lamrow, T1 = _min_lam_start(tab)
     t0 = dual_simplex.Tableau(A, b, -e, T1, like=tab)
     t0.W  # noqa: B018 (formed)
     start = dense_lp.batch_dual_simplex(t0, [()])[0]
