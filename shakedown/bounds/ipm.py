@@ -299,10 +299,8 @@ def complete_basis(A, z, s, e, n, max_missing=None):
     k = n - m
     if k <= 0:
         return None
-    Qf, Rf = np.linalg.qr(A[C].T, mode="complete")
-    Q = Qf[:, m:]
+    Q, rd = _null_space(A[C].T)
     # rank of A_C from the triangular factor at hand (an SVD of A_C took 3-9 s at N = 2000)
-    rd = np.abs(np.diag(Rf))
     if not rd.min() > rd.max() * max(A.shape) * np.finfo(float).eps:
         return None
     rest = np.setdiff1d(np.arange(A.shape[0]), C)
@@ -337,3 +335,22 @@ def complete_basis(A, z, s, e, n, max_missing=None):
     if len(np.unique(T)) != n:
         return None
     return np.sort(np.asarray(T, dtype=int))
+
+
+def _null_space(X):
+    """``(Q, |diag R|)``: the last ``n - m`` columns of the complete Householder QR of ``X``
+    (``n x m``, ``m < n``: an orthonormal basis of ``null(X^T)``) and the magnitudes of its
+    triangular factor's diagonal.  The reflectors are applied to ``[0; I]`` (LAPACK ``ormqr``)
+    instead of forming the whole ``n x n`` factor (N = 2000, ``m`` = 1950: 0.37 s against
+    0.85 s; the same columns to 4e-16)."""
+    n, m = X.shape
+    (qr, tau), _ = sla.qr(X, mode="raw", check_finite=False)
+    Z = np.zeros((n, n - m), order="F")
+    Z[m:] = np.eye(n - m)
+    ormqr = sla.get_lapack_funcs("ormqr", (qr,))
+    work = ormqr("L", "N", qr, tau, Z, lwork=-1)[1]
+    Q, _, info = ormqr("L", "N", qr, tau, Z, lwork=max(int(work[0].real), 1), overwrite_c=1)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"ormqr failed (info = {info})")
+    return Q, np.abs(np.diag(qr[:m, :m]))
+

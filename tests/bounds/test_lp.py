@@ -407,6 +407,23 @@ def test_blocked_independent_rows_pick_the_rows_of_the_row_by_row_rule(block, se
     assert np.linalg.matrix_rank(A[_independent_rows(A, order, n, block=block)]) == n
 
 
+@pytest.mark.parametrize("n, m", [(5, 1), (40, 39), (120, 70)])
+def test_null_space_equals_the_complete_qr(n, m):
+    """The completion's null space from the Householder reflectors (``ormqr`` on ``[0; I]``)
+    is the complete QR's last ``n - m`` columns: orthonormal, orthogonal to ``X``'s columns,
+    with the same triangular diagonal (the rank test of :func:`complete_basis`)."""
+    from shakedown.bounds.ipm import _null_space
+
+    X = np.random.default_rng(n + m).standard_normal((n, m)) * 1e3
+    Q, rd = _null_space(X)
+    Qf, Rf = np.linalg.qr(X, mode="complete")
+    assert Q.shape == (n, n - m)
+    assert np.allclose(Q, Qf[:, m:], atol=1e-12, rtol=0)
+    assert np.allclose(Q.T @ Q, np.eye(n - m), atol=1e-12, rtol=0)
+    assert np.abs(X.T @ Q).max() <= 1e-12 * np.abs(X).max() * n
+    assert np.allclose(rd, np.abs(np.diag(Rf)), rtol=1e-13, atol=0)
+
+
 def test_complete_basis_refuses_dependent_strongly_active_rows():
     """The strongly active rows must be independent (their rank from the QR factor at hand,
     issue 26, formerly an SVD): three strongly active rows of rank 2 give no completion, three
