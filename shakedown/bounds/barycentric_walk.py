@@ -174,6 +174,7 @@ class BarycentricWalk:
         M = np.empty((m, m))
         M[0] = self.f.y[P]
         self.KT[: m - 1] = K[Tl]
+        self.kt32_rows = -1  # (the kernel's single-precision copy of K_T is stale)
         M[1:] = self.KT[: m - 1][:, P]  # (a gather from K[Tl] rows, not K[ix_]: ~7x cheaper)
         W = iu.inverse(M)
         if W is None:
@@ -379,6 +380,7 @@ class BarycentricWalk:
         the entering variable's new value (the vertex is updated, not recomputed)."""
         P, Tl, W, K = self.P, self.Tl, self.W, self.f.K
         m = len(P)
+        self.kt32_rows = -1  # (K_T may change: the kernel's copy is refreshed)
         self.sP = self.sP + step * dP
         self.sJ += step * dS
         if kind == "row":

@@ -11,6 +11,12 @@ not a pivot: a recomputation of ``W`` from scratch (LU, :meth:`.BasisLP._inverse
 optimum (the answer is formed and certified in Python, :meth:`.BasisLP._answer`), the pivot cap
 and failures.  Nothing is concluded here: the answers are certified as before.
 
+The slacks of the rows outside the working basis, a pass over ``K_P`` per pivot, only choose
+the leaving row ("the most infeasible"): that pass reads a single-precision copy of ``K_P``
+(half the bytes; issue 26), the chosen row's slack is recomputed in double, and the pass is
+redone in double when that row is not infeasible, so optimality is only ever concluded from
+double slacks.  Ties within single precision's rounding may be broken otherwise than by NumPy.
+
 The sums may be reassociated (``fastmath=FAST``, :mod:`shakedown.model.jit`) so that the
 products with the working inverse vectorize, and the ``O(N m)`` passes over ``K_P`` and ``K_T``
 take four columns or rows at a time: they round differently from NumPy's (issue 26, a crack
@@ -70,8 +76,28 @@ def _add_rows2(M, a, b, k, outa, outb):  # pragma: no cover - compiled
 
 
 @njit(cache=True, fastmath=FAST)
+def _slacks(KP, star, mJ, ys, sP, m, T, sJ):  # pragma: no cover - compiled
+    """``sJ = star - mJ ys - K_P sP`` (``KP`` in double or single precision), zero on the
+    tight rows ``T``."""
+    for j in range(sJ.size):
+        sJ[j] = star[j] - mJ[j] * ys
+    _sub_cols(KP, sP, m, sJ)
+    for i in range(m):
+        sJ[T[i]] = 0.0
+
+
+@njit(cache=True, fastmath=FAST)
+def _slack(KP, star, mJ, ys, sP, m, j):  # pragma: no cover - compiled
+    """Row ``j`` of :func:`_slacks` in double precision (``j`` not tight)."""
+    acc = star[j] - mJ[j] * ys
+    for i in range(m):
+        acc -= KP[j, i] * sP[i]
+    return acc
+
+
+@njit(cache=True, fastmath=FAST)
 def advance(K, KF, mJ, y, c, star, lam2, tol, piv_tol, kl, cap, refactor, refactor_div,
-            P, T, W, KP, KT, st, budget, out):  # pragma: no cover - compiled
+            P, T, W, KP, KP32, KT, st, budget, out):  # pragma: no cover - compiled
     """Pivots of :meth:`.BasisLP._steps` from the state ``(P, T, W, KP, KT)`` with ``st =
     [m, pivots, pivots since W was recomputed]`` (updated in place) until one of the codes of
     this module; at most ``budget`` pivots (then :data:`BUDGET`).  ``out[0]``: the dual bound
@@ -111,11 +137,10 @@ def advance(K, KF, mJ, y, c, star, lam2, tol, piv_tol, kl, cap, refactor, refact
         out[0] = lam2 - cs
         if done >= budget:
             return BUDGET
-        for j in range(nJ):
-            sJ[j] = star[j] - mJ[j] * ys
-        _sub_cols(KP, sP, m, sJ)
-        for i in range(m):
-            sJ[T[i]] = 0.0
+        # slacks of the rows J by a pass over K_P in single precision (half the bytes):
+        # they only choose the leaving row, whose slack is then recomputed in double (as is
+        # row k's); the pass is redone in double when that row is not infeasible
+        _slacks(KP32, star, mJ, ys, sP, m, T, sJ)
         # duals of the tight rows (z above) and their weighted sum
         mz = 0.0
         for j in range(m):
@@ -126,6 +151,8 @@ def advance(K, KF, mJ, y, c, star, lam2, tol, piv_tol, kl, cap, refactor, refact
                 kpos = j
                 break
         # leaving: row k first, then the most infeasible
+        if kl >= 0 and kpos < 0:
+            sJ[kl] = _slack(KP, star, mJ, ys, sP, m, kl)
         if kl >= 0 and kpos < 0 and abs(sJ[kl]) > tol:
             is_row, q, sgn = True, kl, (-1.0 if sJ[kl] > 0 else 1.0)
         else:
@@ -133,6 +160,14 @@ def advance(K, KF, mJ, y, c, star, lam2, tol, piv_tol, kl, cap, refactor, refact
             for j in range(1, nJ):
                 if sJ[j] < sJ[i]:
                     i = j
+            if m:
+                sJ[i] = _slack(KP, star, mJ, ys, sP, m, i)
+                if not sJ[i] < -tol:  # (none infeasible in single precision): in double
+                    _slacks(KP, star, mJ, ys, sP, m, T, sJ)
+                    i = 0
+                    for j in range(1, nJ):
+                        if sJ[j] < sJ[i]:
+                            i = j
             r = -1
             worst = sJ[i]
             if m:
@@ -241,6 +276,7 @@ def advance(K, KF, mJ, y, c, star, lam2, tol, piv_tol, kl, cap, refactor, refact
             P[m], T[m] = e, q
             for j in range(nJ):
                 KP[j, m] = KF[j, e]
+                KP32[j, m] = KF[j, e]
             for col in range(ncol):
                 KT[m, col] = K[q, col]
             st[0] = m + 1
@@ -282,6 +318,7 @@ def advance(K, KF, mJ, y, c, star, lam2, tol, piv_tol, kl, cap, refactor, refact
             P[q] = e
             for j in range(nJ):
                 KP[j, q] = KF[j, e]
+                KP32[j, q] = KF[j, e]
         else:  # coordinate P[q] leaves, tight row T[e] loosens: both removed
             piv = W[q, e]
             for i in range(m):
@@ -299,6 +336,7 @@ def advance(K, KF, mJ, y, c, star, lam2, tol, piv_tol, kl, cap, refactor, refact
             P[q], T[e] = P[last], T[last]
             for j in range(nJ):
                 KP[j, q] = KP[j, last]
+                KP32[j, q] = KP32[j, last]
             for col in range(ncol):
                 KT[e, col] = KT[last, col]
             st[0] = last
@@ -320,10 +358,11 @@ def steps(lp, k, kl, max_pivots, KP, KT, piv_tol, verify=True, chunk=None):
     W = np.empty((ncol + 1, ncol + 1))
     st = np.zeros(3, np.int64)
     out = np.zeros(1)
+    KP32 = np.empty(KP.shape, np.float32, order="F")  # K_P in single precision (advance)
     last = 0  # pivots at the last yield
     while True:
         code = advance(lp.K, lp.KF, lp.mJ, f.y, lp.cost, lp.star, f.lam2, lp.tol, piv_tol,
-                       kl, cap, iu.REFACTOR, iu.REFACTOR_DIV, P, T, W, KP, KT, st,
+                       kl, cap, iu.REFACTOR, iu.REFACTOR_DIV, P, T, W, KP, KP32, KT, st,
                        max(chunk - (int(st[1]) - last), 1), out)
         m, it = int(st[0]), int(st[1])
         if code == BUDGET:

@@ -8,6 +8,14 @@ the working inverse from scratch, the check of a batch of vertices in ``v``, the
 Nothing is concluded here: the vertices are checked in ``v`` as before (issue 26: at ``m`` ~ 50
 rows tight outside the ``lam2`` basis a pivot spent ~0.3 ms in small NumPy calls).
 
+At ``m`` ~ 600 (2000-crack networks) a pivot streams ~20 MB (``K_P``, ``K_T``, the inverse
+``W``), so two passes are spared (issue 26): the multipliers ``W^T g_P`` of the next pivot are
+summed while the update writes ``W``, and the pricing pass reads a single-precision copy of
+``K_T`` (:data:`SINGLE_MARGIN`).  That pass only picks the entering coordinate: its reduced
+cost is recomputed in double, the pass is redone in double when that one does not improve, and
+optimality is only ever concluded from the double pass.  Ties within single precision's
+rounding (~1e-7 of the scale) may be broken otherwise than by NumPy's Dantzig pricing.
+
 The sums may be reassociated (``fastmath=FAST``, :mod:`shakedown.model.jit`) so that the
 products with the working inverse vectorize, and the ``O(N m)`` passes over ``K_P`` and ``K_T``
 take four columns or rows at a time: they round differently from NumPy's (issue 26, a crack
@@ -25,6 +33,10 @@ from . import inverse_updates as iu
 #: vertices to check is full, the target row became tight, optimal (the target stays slack),
 #: broken (unbounded, or more tight rows than allowed).
 BUDGET, REFACTOR, FLUSH, REACHED, OPTIMAL, BROKEN = 0, 1, 2, 3, 4, 5
+#: The entering coordinate picked in single precision is taken if its reduced cost, recomputed
+#: in double, exceeds this many times the pivot tolerance (else the pricing is redone in
+#: double): the single-precision pass errs by ~1e-7 of the scale.
+SINGLE_MARGIN = 1e5
 
 __all__ = ["HAVE_KERNEL", "pivots", "walk"]
 
@@ -62,8 +74,42 @@ def _sub_cols(M, a, k, out):  # pragma: no cover - compiled
 
 
 @njit(cache=True, fastmath=FAST)
-def pivots(K, KF, y, g, kl, piv_tol, limit, refactor, refactor_div, P, Tl, W, KP, KT, sP, sJ,
-           covered, unchecked, Jrows, S, room, st, budget):  # pragma: no cover - compiled
+def _price(g, y, z, nT, KT, P, m, rc):  # pragma: no cover - compiled
+    """Dantzig pricing: ``rc = g - z_0 y - z_T K_T`` (``KT`` in double or single precision)
+    with the basic coordinates zeroed; returns ``(e, best, jj, scale)``: the entering
+    coordinate (``-1``: the slack of tight row ``jj``), its reduced cost, and the scale of the
+    reduced costs and multipliers."""
+    ncol = rc.size
+    w = z[0]
+    for e in range(ncol):
+        rc[e] = g[e] - w * y[e]
+    _sub_rows(KT, z[1:], nT, rc)
+    for i in range(m):
+        rc[P[i]] = 0.0
+    scale = 1e-300
+    for e in range(ncol):
+        scale = max(scale, abs(rc[e]))
+    for j in range(nT):
+        scale = max(scale, abs(z[1 + j]))
+    e = 0
+    for c in range(1, ncol):
+        if rc[c] > rc[e]:
+            e = c
+    best = rc[e]
+    jj = -1
+    if nT:
+        jj = 0
+        for j in range(1, nT):
+            if z[1 + j] < z[1 + jj]:
+                jj = j
+        if -z[1 + jj] > best:
+            best, e = -z[1 + jj], -1
+    return e, best, jj, scale
+
+
+@njit(cache=True, fastmath=FAST)
+def pivots(K, KF, y, g, kl, piv_tol, limit, refactor, refactor_div, P, Tl, W, KP, KT, KT32, sP,
+           sJ, covered, unchecked, Jrows, S, room, st, budget):  # pragma: no cover - compiled
     """Pivots of ``max g . sigma`` from the state ``(P, Tl, W, KP, KT, sP, sJ)`` with ``st =
     [m, pivots since W was recomputed, vertices written to S, whether the current vertex is
     held]`` (updated in place), at most ``budget``; a code of this module."""
@@ -73,41 +119,35 @@ def pivots(K, KF, y, g, kl, piv_tol, limit, refactor, refactor_div, P, Tl, W, KP
     col = np.empty(ncol)
     dP = np.empty(ncol)
     dS = np.empty(nJ)
+    zn = np.empty(ncol + 1)  # W^T g_P of the next pivot, summed as its update writes W
+    fresh = False  # zn holds it
     done = 0
     while done < budget:
         m, since = st[0], st[1]
         nT = m - 1
         # pricing: reduced costs per unit of slack
-        for j in range(m):  # z = W^T g_P, by rows of W (contiguous)
-            z[j] = 0.0
-        for i in range(m):
-            a = g[P[i]]
+        if fresh:
             for j in range(m):
-                z[j] += a * W[i, j]
-        w = z[0]
-        for e in range(ncol):
-            rc[e] = g[e] - w * y[e]
-        _sub_rows(KT, z[1:], nT, rc)
-        for i in range(m):
-            rc[P[i]] = 0.0
-        scale = 1e-300
-        for e in range(ncol):
-            scale = max(scale, abs(rc[e]))
-        for j in range(nT):
-            scale = max(scale, abs(z[1 + j]))
-        e = 0
-        for c in range(1, ncol):
-            if rc[c] > rc[e]:
-                e = c
-        best = rc[e]
-        jj = -1
-        if nT:
-            jj = 0
-            for j in range(1, nT):
-                if z[1 + j] < z[1 + jj]:
-                    jj = j
-            if -z[1 + jj] > best:
-                best, e = -z[1 + jj], -1
+                z[j] = zn[j]
+        else:
+            for j in range(m):  # z = W^T g_P, by rows of W (contiguous)
+                z[j] = 0.0
+            for i in range(m):
+                a = g[P[i]]
+                for j in range(m):
+                    z[j] += a * W[i, j]
+        fresh = False
+        # the pass over K_T in single precision (half the bytes) picks the entering
+        # coordinate; its reduced cost is then recomputed in double, and the pass is redone in
+        # double when that one does not improve or nothing seems to
+        e, best, jj, scale = _price(g, y, z, nT, KT32, P, m, rc)
+        if e >= 0:
+            exact = g[e] - z[0] * y[e]
+            for j in range(nT):
+                exact -= z[1 + j] * KT[j, e]
+            best = exact
+        if not best > SINGLE_MARGIN * piv_tol * scale:
+            e, best, jj, scale = _price(g, y, z, nT, KT, P, m, rc)
         if not best > piv_tol * scale:
             return OPTIMAL
         # the edge: basic coordinates and slacks per unit of the entering variable
@@ -190,13 +230,20 @@ def pivots(K, KF, y, g, kl, piv_tol, limit, refactor, refactor_div, P, Tl, W, KP
             pq = -dP[q]
             for j in range(m):
                 col[j] = W[q, j] / pq
-            for i in range(m):
-                a = -dP[i]
-                for j in range(m):
-                    W[i, j] -= a * col[j]
-            for j in range(m):
-                W[q, j] = col[j]
+                zn[j] = 0.0
             P[q] = e
+            for i in range(m):  # (and the next multipliers from the rows written)
+                if i == q:
+                    for j in range(m):
+                        W[q, j] = col[j]
+                else:
+                    a = -dP[i]
+                    for j in range(m):
+                        W[i, j] -= a * col[j]
+                a = g[P[i]]
+                for j in range(m):
+                    zn[j] += a * W[i, j]
+            fresh = True
             sP[q] = step
             for r in range(nJ):
                 KP[r, q] = KF[r, e]
@@ -221,6 +268,7 @@ def pivots(K, KF, y, g, kl, piv_tol, limit, refactor, refactor_div, P, Tl, W, KP
                 KP[r, q] = KP[r, last]
             for c in range(ncol):
                 KT[jj, c] = KT[nT - 1, c]
+                KT32[jj, c] = KT32[nT - 1, c]
             st[0] = m - 1
         elif e >= 0:  # column e and row q added: schur = -dS[q]
             schur = -dS[q]
@@ -230,20 +278,30 @@ def pivots(K, KF, y, g, kl, piv_tol, limit, refactor, refactor_div, P, Tl, W, KP
                 a = K[q, P[i]]
                 for j in range(m):
                     z[j] += a * W[i, j]
-            for i in range(m):
+            for j in range(m + 1):
+                zn[j] = 0.0
+            for i in range(m):  # (and the next multipliers from the rows written)
                 a = -dP[i] / schur
                 for j in range(m):
                     W[i, j] += a * z[j]
                 W[i, m] = dP[i] / schur
+                a = g[P[i]]
+                for j in range(m + 1):
+                    zn[j] += a * W[i, j]
             for j in range(m):
                 W[m, j] = -z[j] / schur
             W[m, m] = 1.0 / schur
+            a = g[e]
+            for j in range(m + 1):
+                zn[j] += a * W[m, j]
+            fresh = True
             P[m], Tl[nT] = e, q
             sP[m] = step
             for r in range(nJ):
                 KP[r, m] = KF[r, e]
             for c in range(ncol):
                 KT[nT, c] = K[q, c]
+                KT32[nT, c] = K[q, c]
             st[0] = m + 1
         else:  # row 1 + jj of M replaced by row q of K
             rr = 1 + jj
@@ -258,13 +316,19 @@ def pivots(K, KF, y, g, kl, piv_tol, limit, refactor, refactor_div, P, Tl, W, KP
             den = dS[q]
             for i in range(m):
                 col[i] = W[i, rr] / den
-            for i in range(m):
+                zn[i] = 0.0
+            for i in range(m):  # (and the next multipliers from the rows written)
                 a = col[i]
                 for j in range(m):
                     W[i, j] -= a * z[j]
+                a = g[P[i]]
+                for j in range(m):
+                    zn[j] += a * W[i, j]
+            fresh = True
             Tl[jj] = q
             for c in range(ncol):
                 KT[jj, c] = K[q, c]
+                KT32[jj, c] = K[q, c]
         done += 1
         st[1] = since + 1
         st[3] = 0
@@ -289,6 +353,9 @@ def walk(bw, g, kl, cap, check_batch, piv_tol):
         bw._kbuf = (np.zeros(capm, np.int64), np.zeros(capm, np.int64), np.empty((capm, capm)),
                     np.empty(capm), np.empty((check_batch, f.K.shape[1])), np.zeros(4, np.int64))
     P, Tl, W, sP, S, st = bw._kbuf
+    if getattr(bw, "KT32", None) is None or bw.KT32.shape != bw.KT.shape:
+        bw.KT32 = np.empty(bw.KT.shape, np.float32)
+        bw.kt32_rows = 0
 
     def load():
         m = len(bw.P)
@@ -299,6 +366,9 @@ def walk(bw, g, kl, cap, check_batch, piv_tol):
         if not (bw.sP.base is sP and len(bw.sP) == m):
             sP[:m] = bw.sP
         st[0], st[1], st[2] = m, bw.since, 0
+        if bw.kt32_rows != m - 1:  # K_T set by Python (a recomputation): copied anew
+            bw.KT32[: m - 1] = bw.KT[: m - 1]
+        bw.kt32_rows = m - 1
 
     def store():
         m = int(st[0])
@@ -312,12 +382,13 @@ def walk(bw, g, kl, cap, check_batch, piv_tol):
     while left > 0:
         before = int(st[1])
         code = pivots(f.K, f.KF, f.y, g, kl, piv_tol, bw.limit, iu.REFACTOR, iu.REFACTOR_DIV,
-                      P, Tl, W, bw.KP, bw.KT, sP, bw.sJ, bw.covered, bw.unchecked, f.J, S,
+                      P, Tl, W, bw.KP, bw.KT, bw.KT32, sP, bw.sJ, bw.covered, bw.unchecked, f.J, S,
                       check_batch - len(bw._buffer), st, left)
         done = int(st[1]) - before
         bw.pivots += done
         left -= done
         store()
+        bw.kt32_rows = int(st[0]) - 1
         if code == OPTIMAL:
             return "optimal"
         if code == BROKEN:

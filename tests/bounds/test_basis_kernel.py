@@ -153,7 +153,7 @@ def test_a_corrupted_state_is_refused(monkeypatch):
 
     def corrupt(*args):
         code = orig(*args)
-        st, T = args[18], args[14]
+        st, T = args[-3], args[14]
         if st[0] >= 2 and not hit:
             T[0] = (T[0] + 1) % len(lp.rows)  # the tight row recorded is not the one pivoted
             hit.append(True)
@@ -170,3 +170,29 @@ def test_a_corrupted_state_is_refused(monkeypatch):
             if a.status == "optimal":  # only if the optimum does not depend on it: certified
                 assert max(a.residuals) <= 1e-9
     assert refused
+
+
+@pytest.mark.parametrize("case", ["random40", "kachanov150"])
+def test_single_precision_slacks_only_choose(case, monkeypatch):
+    """The kernel's pass over ``K_P`` in single precision only picks the leaving row: with that
+    copy useless (zeroed at every call, so the pass sees ``star - m_J ys`` alone) each row's
+    slack it takes is recomputed in double and the pass redone in double when that row is not
+    infeasible, so every answer is still the optimum NumPy finds (same value and status)."""
+    f, tab, _ = _frame(case)
+    lp = BasisLP(f, tab)
+    orig = basis_kernel.advance
+    calls = []
+
+    def useless(*args):
+        args[17][:] = 0.0  # KP32
+        calls.append(1)
+        return orig(*args)
+
+    monkeypatch.setattr(basis_kernel, "advance", useless)
+    for k in f.J[:40]:
+        ref, got = _both(monkeypatch, lp, int(k))
+        assert got.status == ref.status
+        if ref.status == "optimal":
+            assert got.x[-1] == pytest.approx(ref.x[-1], rel=1e-12, abs=1e-14)
+            assert max(got.residuals) <= 1e-9
+    assert calls

@@ -150,7 +150,7 @@ def test_the_pruning_with_the_kernels_gives_numpys_lam1(monkeypatch):
     orig = walk_kernel.pivots
 
     def spy(*args):
-        st = args[21]
+        st = args[-2]
         before = int(st[1])
         code = orig(*args)
         pivots.append(int(st[1]) - before)
@@ -163,3 +163,49 @@ def test_the_pruning_with_the_kernels_gives_numpys_lam1(monkeypatch):
     assert got.lam1 == pytest.approx(ref.lam1, rel=1e-12)
     assert got.limiting_constraint == ref.limiting_constraint
     np.testing.assert_allclose(got.lam_high, ref.lam_high, rtol=1e-10)
+
+
+def test_single_precision_pricing_only_chooses(monkeypatch):
+    """The walk's pricing pass over ``K_T`` in single precision only picks the entering
+    coordinate: with that copy useless (noise at every call) the reduced cost of the one it
+    picks is recomputed in double and the pricing redone in double when it does not improve.
+    So every pivot (one per call here) still moves along an edge on which the target's
+    objective does not decrease, and every decision is the truth."""
+    monkeypatch.setattr(basis_lp, "KERNEL_MIN_N", 0)
+    G, c, m, B, x2, lam2 = _problem(40, 5)
+    f = SimplexFrame.of(G, c, m, B, x2, lam2)
+    t = 0.95 * lam2
+    b = c + t * m
+    w = BarycentricWalk(f, t, _vertex(G, b, 5))
+    assert w.ok
+    orig = walk_kernel.pivots
+    calls = []
+    rng = np.random.default_rng(0)
+
+    def useless(*args):
+        args[14][:] = 1e3 * rng.standard_normal(args[14].shape)  # KT32: noise
+        calls.append(1)
+        return orig(*args)
+
+    monkeypatch.setattr(walk_kernel, "pivots", useless)
+    decided = moves = 0
+    for k in f.J[:60]:
+        g = f.K[f.loc[k]]
+        for _ in range(400):
+            before = float(g[w.P] @ w.sP)
+            out = w.walk_to(int(k), 0)  # one pivot
+            if w.broken:
+                break
+            moves += 1
+            assert float(g[w.P] @ w.sP) >= before - 1e-9 * (1.0 + abs(before)), k
+            if out is UNCHECKED:
+                assert w.flush()
+                out = bool(w.covered[k])
+            if out is True or out is False:
+                assert out is _face_nonempty(G, b, int(k))
+                decided += 1
+                break
+        if out is False or w.broken:
+            w = BarycentricWalk(f, t, w.T)
+            assert w.ok
+    assert calls and moves and decided >= 30
