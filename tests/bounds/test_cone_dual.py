@@ -140,3 +140,31 @@ def test_non_finite_multipliers_prove_nothing(bad):
     z = c.multipliers.copy()
     z[0, 1] = bad
     assert dual_bound(d, c.nodes, c.times, z)[0] == np.inf
+
+
+def test_an_open_bracket_without_violated_cuts_is_closed_by_the_dense_path(monkeypatch):
+    """Clarabel's multipliers spoiled by 1e-6 relative noise certify its value only to ~1e-6:
+    with no cut violated the bracket is then closed by the active cuts alone on the dense path
+    (``melan._tighten``), to the rtol asked, not left open."""
+    from dataclasses import replace
+
+    from shakedown.bounds.cones import melan
+
+    orig = melan.solve_round
+    rng = np.random.default_rng(0)
+    spoiled = []
+
+    def noisy(*args, **kw):
+        ans, bound = orig(*args, **kw)
+        if kw.get("solver") == "clarabel" and ans.z is not None:
+            spoiled.append(1)
+            ans = replace(ans, z=ans.z * (1 + 1e-6 * rng.standard_normal(ans.z.shape)))
+        return ans, bound
+
+    monkeypatch.setattr(melan, "solve_round", noisy)
+    s, load = random_3d(4, 21), random_load(4, 31)
+    b = cone_bounds(s, load, only=("lam2",), solver="clarabel", rtol=1e-8)
+    assert spoiled
+    assert b.status == "bounded", b.message
+    assert b.lam2_upper - b.lam2_lower <= 1e-8 * b.lam2_upper
+    assert sd.bounds.cones.certify.check_safe_state(s, load, b.state_at_lam2, b.lam2_lower)[0]
