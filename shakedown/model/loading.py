@@ -194,9 +194,10 @@ class LoadCycle:
             k = np.arange(1, self.n_harmonics + 1)
             ang = 2 * np.pi * t[..., None] * k  # (..., H)
             c, s = np.cos(ang), np.sin(ang)
-            if self.dim == 3:
-                q = np.tensordot(c, self.q_cos, axes=(-1, 0)) + np.tensordot(s, self.q_sin,
-                                                                             axes=(-1, 0))
+            if self.dim == 3:  # per direction as in 2-D: the same products, the same bits
+                q = np.stack([c @ np.ascontiguousarray(self.q_cos[..., d])
+                              + s @ np.ascontiguousarray(self.q_sin[..., d]) for d in (0, 1)],
+                             axis=-1)
             else:
                 q = c @ self.q_cos + s @ self.q_sin
             p = c @ self.p_cos + s @ self.p_sin
@@ -292,8 +293,8 @@ class LoadCycle:
         if self.kind == "harmonic":
             loss = 1.0 - np.cos(np.pi * np.arange(1, self.n_harmonics + 1) / S)  # (H,)
             if self.dim == 3:
-                err = np.tensordot(loss, np.hypot(self.q_cos, self.q_sin), axes=(0, 0))
-                err_q = np.hypot(err[:, 0], err[:, 1])
+                amp = np.hypot(self.q_cos, self.q_sin)  # per direction as in 2-D (same bits)
+                err_q = np.hypot(*(loss @ np.ascontiguousarray(amp[..., d]) for d in (0, 1)))
             else:
                 err_q = loss @ np.hypot(self.q_cos, self.q_sin)
             return err_q, loss @ np.hypot(self.p_cos, self.p_sin)
