@@ -353,4 +353,3 @@ def _null_space(X):
     if info != 0:
         raise np.linalg.LinAlgError(f"ormqr failed (info = {info})")
     return Q, np.abs(np.diag(qr[:m, :m]))
-
