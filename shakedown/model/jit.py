@@ -2,7 +2,9 @@
 
 ``SHAKEDOWN_KERNEL=numpy`` (or ``python``, ``off``, ``0``) in the environment switches the
 compiled kernels off: the bounds engine's pivots (:mod:`shakedown.bounds.basis_kernel`,
-:mod:`shakedown.bounds.walk_kernel`) then run in NumPy, pivot for pivot the same rules.  The
+:mod:`shakedown.bounds.walk_kernel`) then run in NumPy, pivot for pivot the same rules (the
+kernels choose some pivots from single-precision passes: ties within their rounding may break
+otherwise; every choice is rechecked in double and every answer certified as before).  The
 cyclic solver's kernels read the same switch through :mod:`shakedown.evolution.kernel_jit`,
 which also stamps their on-disk cache (those files may not import the package, so the switch
 is read there on its own).
