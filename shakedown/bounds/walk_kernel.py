@@ -352,10 +352,9 @@ def walk(bw, g, kl, cap, check_batch, piv_tol):
         capm = bw.KP.shape[1]
         bw._kbuf = (np.zeros(capm, np.int64), np.zeros(capm, np.int64), np.empty((capm, capm)),
                     np.empty(capm), np.empty((check_batch, f.K.shape[1])), np.zeros(4, np.int64))
+        bw.KT32 = np.empty(bw.KT.shape, np.float32)  # K_T in single precision (pricing)
+        bw.kt32_rows = -1
     P, Tl, W, sP, S, st = bw._kbuf
-    if getattr(bw, "KT32", None) is None or bw.KT32.shape != bw.KT.shape:
-        bw.KT32 = np.empty(bw.KT.shape, np.float32)
-        bw.kt32_rows = 0
 
     def load():
         m = len(bw.P)

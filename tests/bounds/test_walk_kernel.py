@@ -36,6 +36,17 @@ def _step(monkeypatch, walks, k, cap):
     return out
 
 
+def _judged(w, k, out, G, b):
+    """``out`` of ``w.walk_to(k, ...)``, a row left unchecked checked now; a decision
+    (``True``: face non-empty, ``False``: empty) must be the truth (HiGHS)."""
+    if out is UNCHECKED:
+        assert w.flush()
+        out = bool(w.covered[k])
+    if out is True or out is False:
+        assert out is _face_nonempty(G, b, int(k))
+    return out
+
+
 def _same_state(a, b):
     assert a.pivots == b.pivots and a.broken == b.broken
     assert a.P == b.P and a.Tl == b.Tl
@@ -100,13 +111,8 @@ def test_degenerate_walks_decide_rightly(monkeypatch):
     assert w.ok
     decided = 0
     for k in f.J:
-        out = w.walk_to(int(k), 500)
-        if out is UNCHECKED:
-            assert w.flush()
-            out = bool(w.covered[k])
-        if out is True or out is False:
-            assert out is _face_nonempty(G, b, int(k))
-            decided += 1
+        out = _judged(w, k, w.walk_to(int(k), 500), G, b)
+        decided += out is True or out is False
         if out is False or w.broken:
             w = BarycentricWalk(f, t, w.T)
             assert w.ok
@@ -198,11 +204,8 @@ def test_single_precision_pricing_only_chooses(monkeypatch):
                 break
             moves += 1
             assert float(g[w.P] @ w.sP) >= before - 1e-9 * (1.0 + abs(before)), k
-            if out is UNCHECKED:
-                assert w.flush()
-                out = bool(w.covered[k])
+            out = _judged(w, k, out, G, b)
             if out is True or out is False:
-                assert out is _face_nonempty(G, b, int(k))
                 decided += 1
                 break
         if out is False or w.broken:

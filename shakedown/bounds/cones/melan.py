@@ -178,12 +178,8 @@ def melan_lam2(data, *, rtol=BRACKET_RTOL, max_rounds=60, cuts=None, solver="aut
                 eps = max(float(g.max()), 0.0)
                 theta = tau0 / (tau0 + eps + CUT_TOL * tau0)
                 uc, lc = theta * ans.u + (1 - theta) * u0, theta * ans.lam
-        hi, res = cert[0], cert[1]
-        for k, v in res.items():
-            worst[k] = max(worst[k], v)
-        if hi < out.lam_hi:  # valid whatever the residuals (.dual); they only loosen it
-            out.lam_hi, out.z = hi, cert[2]
-            out.cut_nodes, out.cut_times = cert[3].copy(), cert[4].copy()
+        res = cert[1]
+        _adopt(out, worst, cert)
         gc, _ = worst_times(data, uc, lc)
         if gc.max() <= 0 and lc >= out.lam_lo:
             out.lam_lo, out.u_safe, out.margin = lc, uc, float(-gc.max())
@@ -200,11 +196,7 @@ def melan_lam2(data, *, rtol=BRACKET_RTOL, max_rounds=60, cuts=None, solver="aut
             cert, ans2 = _tighten(data, nodes, times, ans, (0.9 * uc + 0.1 * u0, 0.9 * lc),
                                   log, fail, split)
             out.iterations += ans2.iterations if ans2 is not None else 0
-            if cert[0] < out.lam_hi:
-                out.lam_hi, out.z = cert[0], cert[2]
-                out.cut_nodes, out.cut_times = cert[3].copy(), cert[4].copy()
-                for k, v in cert[1].items():
-                    worst[k] = max(worst[k], v)
+            _adopt(out, worst, cert)
             if out.lam_hi - out.lam_lo <= rtol * max(out.lam_hi, 1e-300):
                 break
         if viol.size == 0:  # no violation but the bracket is open: dual not certified
@@ -224,6 +216,18 @@ def melan_lam2(data, *, rtol=BRACKET_RTOL, max_rounds=60, cuts=None, solver="aut
                             f"(nondimensional) after {out.rounds} SOCPs, not to rtol = {rtol:g}")
     out.residuals = worst
     return out
+
+
+def _adopt(out, worst, cert):
+    """Take the bound of ``cert = (hi, residuals, z, nodes, times)`` where it is lower than the
+    bracket's upper end (valid whatever the residuals, :mod:`.dual`: they only loosen it), and
+    keep the worst residuals."""
+    hi, res, z, nodes, times = cert
+    for k, v in res.items():
+        worst[k] = max(worst[k], v)
+    if hi < out.lam_hi:
+        out.lam_hi, out.z = hi, z
+        out.cut_nodes, out.cut_times = nodes.copy(), times.copy()
 
 
 def _too_wide(out, hi, lc, lam, rtol):
