@@ -31,6 +31,17 @@ Globalisation: backtracking on the
 merit ``sum |phi|^2`` of the AC residual (in force units) from the Newton point towards the
 current one; the iteration stops when the residual is below ``tol`` of the force scale or stalls.
 
+Precision.  The matrix of a GMRES solve is assembled in single precision only, for its
+products (half the memory traffic of the products that dominate the step; a relative
+perturbation of ~1e-7 of the Newton matrix, i.e. a slightly more inexact Newton direction);
+a solve that does not converge within one restart cycle is redone in double
+(:func:`.cone_reduced._newton_point`), and the attempt continues in double once a
+single-precision direction is not accepted in full or does not reduce ``max |phi|`` tenfold
+(:func:`newton_cached`).  Everything else is double: the residual ``phi`` and the stopping test,
+the reactions, which are recomputed from scratch (``r = r_b + K u``) at every full Newton step,
+so that the answer's equilibrium holds by construction and needs no second product to be
+checked (:func:`attempt`; a damped last step or a guess accepted as it is are checked).
+
 The caller (:class:`~.cone_step.ConeStepSolver`) verifies every answer by its own conditions,
 independently of this formulation.  Without numba the same functions run as Python (slow).
 """
@@ -101,6 +112,15 @@ def _classify(r, u, sx, sy, g, rhoT, rhoN, states, phi, nhat, cfac, slack):
 
 
 @njit(cache=True)
+def _unknowns_count(states):
+    """The number of unknowns of the reduced Newton system of the piece ``states``."""
+    m = 0
+    for i in range(states.size):
+        m += 2 if states[i] == SLIP else (3 if states[i] == SEPARATED else 0)
+    return m
+
+
+@njit(cache=True)
 def newton(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, dense_max=DENSE_MAX,
            slack=0.0, scale=0.0, given_r=False):
     """:func:`newton_cached` with fresh buffers (arguments and returns as there)."""
@@ -147,8 +167,11 @@ def newton_cached(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, de
 
     Returns
     -------
-    code, iterations, residual : int, int, float
-        ``code`` in (CONVERGED, STALLED, MAX_ITER, SINGULAR); ``residual = max |phi|``.
+    code, iterations, residual, constructed : int, int, float, bool
+        ``code`` in (CONVERGED, STALLED, MAX_ITER, SINGULAR); ``residual = max |phi|``;
+        ``constructed``: ``r`` is the product ``rb + Kn u`` computed from scratch at the final
+        ``u`` (a full Newton step, or the start without ``given_r``), so that the answer's
+        equilibrium holds by construction (else ``r`` was carried along a damped step or given).
     """
     n = g.size
     phi = np.empty(3 * n)
@@ -162,40 +185,55 @@ def newton_cached(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, de
     nh_try = np.zeros(2 * n)
     cf_try = np.zeros(n)
     dr = np.empty(3 * n)
-    zero = np.zeros(3 * n)
+    r1 = np.empty(3 * n)
     kept = new_kept(n)
+    single = buffers[3].size > 0  # single-precision Krylov products until a direction fails
+    constructed = not given_r
     if not given_r:
         _reactions(Kn, rb, u, r)
     merit = _classify(r, u, sx, sy, g, rhoT, rhoN, states, phi, nhat, cfac, slack)
     it = 0
     while it < max_iter:
         if np.max(np.abs(phi)) <= tol:
-            return CONVERGED, it, np.max(np.abs(phi))
+            return CONVERGED, it, np.max(np.abs(phi)), constructed
         it += 1
         res = np.max(np.abs(phi))
         eta = max(min(1e-2, res / scale), 0.1 * tol / res) if scale > 0.0 else 0.0
         ok, kept = _newton_point(Kn, rb, r, sx, sy, g, rhoT, states, nhat, cfac, unew, dense_max,
-                                 u, eta, buffers, kept)
+                                 u, eta, buffers, kept, single)
         if not ok:
-            return SINGULAR, it, np.max(np.abs(phi))
-        for k in range(3 * n):  # the Newton direction and its reactions, once
+            return SINGULAR, it, np.max(np.abs(phi)), constructed
+        used = single and _unknowns_count(states) > dense_max  # (else solved by LU)
+        # the reactions at the Newton point from scratch (r1 = rb + K unew), and the direction
+        _reactions(Kn, rb, unew, r1)
+        for k in range(3 * n):
             unew[k] -= u[k]
-        _reactions(Kn, zero, unew, dr)
+            dr[k] = r1[k] - r[k]
         alpha = 1.0
         accepted = False
+        redo = False
         for _ls in range(30):
             for k in range(3 * n):
                 utry[k] = u[k] + alpha * unew[k]
-                rtry[k] = r[k] + alpha * dr[k]
+                rtry[k] = r[k] + alpha * dr[k] if alpha < 1.0 else r1[k]
             mt = _classify(rtry, utry, sx, sy, g, rhoT, rhoN, st_try, phi_try, nh_try, cf_try,
                            slack)
-            if mt <= (1.0 - 1e-4 * alpha) * merit or (alpha == 1.0 and mt <= merit
+            full = alpha == 1.0
+            if mt <= (1.0 - 1e-4 * alpha) * merit or (full and mt <= merit
                                                      and np.max(np.abs(phi_try)) <= tol):
                 accepted = True
                 break
+            if full and used:  # the direction is recomputed in double before backtracking
+                redo = True
+                break
             alpha *= 0.5
+        if used and (redo or np.max(np.abs(phi_try)) > 0.1 * res):
+            single = False  # double precision for the rest of the attempt
+        if redo:
+            continue
         if not accepted:
-            return STALLED, it, np.max(np.abs(phi))
+            return STALLED, it, np.max(np.abs(phi)), constructed
+        constructed = alpha == 1.0
         u[:] = utry
         r[:] = rtry
         states[:] = st_try
@@ -204,8 +242,8 @@ def newton_cached(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, de
         cfac[:] = cf_try
         merit = mt
     if np.max(np.abs(phi)) <= tol:
-        return CONVERGED, it, np.max(np.abs(phi))
-    return MAX_ITER, it, np.max(np.abs(phi))
+        return CONVERGED, it, np.max(np.abs(phi)), constructed
+    return MAX_ITER, it, np.max(np.abs(phi)), constructed
 
 
 @njit(cache=True)
@@ -287,14 +325,19 @@ def attempt(Kn, rb, sx, sy, g, rhoT, rhoN, kT, kN, u, r, states, feas_tol, max_i
     step solver's path, :meth:`~.cone_step.ConeStepSolver.solve_raw`): the force scale ``F =
     max |rb|`` (1 if zero), :func:`newton_cached` to ``tol = 1e-3 feas_tol F`` with the stick
     slack ``stick_slack feas_tol F`` and inexact solves at the scale ``F``, then
-    :func:`residuals`.  Arguments as there (``u``, ``r``, ``states`` in place).  Returns
-    ``(code, iterations, F, cone, direction, normal, equilibrium)``."""
+    :func:`residuals`.  Arguments as there (``u``, ``r``, ``states`` in place).  The
+    equilibrium is recomputed (with ``equilibrium``) only when ``r`` is not the product ``rb + K
+    u`` computed from scratch at the answer by the Newton method (a damped last step, or the
+    guess accepted with the reactions ``given_r``); else it holds by construction and is
+    reported as 0.  Returns ``(code, iterations, F, cone, direction, normal, equilibrium)``."""
     F = 0.0
     for k in range(rb.size):
         F = max(F, abs(rb[k]))
     F = F if F > 0.0 else 1.0
-    code, it, _ = newton_cached(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, 1e-3 * feas_tol * F,
-                                max_iter, dense_max, stick_slack * feas_tol * F, F, given_r,
-                                buffers)
-    cone, direc, normal, eq = residuals(Kn, rb, sx, sy, g, kT, kN, u, r, F, equilibrium)
+    code, it, _, constructed = newton_cached(
+        Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, 1e-3 * feas_tol * F, max_iter, dense_max,
+        stick_slack * feas_tol * F, F, given_r, buffers)
+    # equilibrium: by construction when r was computed from scratch at the answer, else checked
+    cone, direc, normal, eq = residuals(Kn, rb, sx, sy, g, kT, kN, u, r, F,
+                                        equilibrium and not constructed)
     return code, it, F, cone, direc, normal, eq

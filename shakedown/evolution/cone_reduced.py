@@ -22,6 +22,11 @@ or is redone with a fresh matrix (:func:`.cone_linear._krylov` with ``exact=Fals
 Newton method checks its own residual after every step, as before.  (Two Newton iterations per
 warm step are typical; the rows whose directions moved less than ``eta`` are 20-50 % of them at
 N = 100.)
+
+With ``single`` the matrix of a GMRES solve is assembled (and kept, and refreshed) in single
+precision only (:func:`.cone_linear._krylov`'s products; the preconditioner's blocks are
+inverted from it too); when that solve does not converge within one restart cycle the matrix is
+assembled in double and solved as without ``single`` (:mod:`.cone_kernel`, "Precision").
 """
 
 from __future__ import annotations
@@ -119,30 +124,34 @@ def _start(Kn, rb, r, u, states, nhat, cfac, sx, sy, g, rhoT, m):
 
 
 @njit(cache=True)
-def new_buffers(n):
-    """The buffers of :func:`_newton_point` for ``n`` nodes: ``(idx, cs, Jbuf)``, the unknowns,
-    their column scales and room for reduced matrices of up to ``2n`` unknowns (larger ones are
-    allocated; fresh pages for every matrix cost more than its assembly)."""
-    return np.empty(3 * n, np.int64), np.empty(3 * n), np.empty(4 * n * n)
+def new_buffers(n, single=True):
+    """The buffers of :func:`_newton_point` for ``n`` nodes: ``(idx, cs, Jbuf, J32buf)``, the
+    unknowns, their column scales and room for reduced matrices of up to ``2n`` unknowns (larger
+    ones are allocated; fresh pages for every matrix cost more than its assembly), in double and
+    (``single``; else empty) in single precision for the Krylov solver's products."""
+    return (np.empty(3 * n, np.int64), np.empty(3 * n), np.empty(4 * n * n),
+            np.empty(4 * n * n if single else 0, np.float32))
 
 
 @njit(cache=True)
 def new_kept(n):
     """No matrix kept (see :func:`_newton_point`)."""
     return (np.empty((0, 0)), np.empty((0, 3)), np.empty(n + 1, np.int64),
-            np.full(n, -1, np.int8), np.zeros((n, 3)))
+            np.full(n, -1, np.int8), np.zeros((n, 3)), np.empty((0, 0), np.float32))
 
 
 @njit(cache=True)
 def _newton_point(Kn, rb, r, sx, sy, g, rhoT, states, nhat, cfac, unew, dense_max, u, eta,
-                  buffers, kept):
+                  buffers, kept, single=False):
     """The reduced semismooth Newton step of the current piece at ``(u, r)``: ``unew`` (3N,);
     returns ``(ok, kept)``, ``ok`` False when the reduced matrix is singular.  ``eta``: the
     forcing term of the linear solve (:func:`.cone_linear._krylov`); ``buffers``:
-    :func:`new_buffers`.  ``kept = (J, Pinv, starts, states, dirs)``: the previous iteration's
-    matrix and preconditioner, the piece and the ``(nx, ny, c)`` per node its rows were built
-    with (:func:`new_kept`: none), reused when the piece is the same and the matrix larger than
-    ``dense_max`` (module docstring)."""
+    :func:`new_buffers`.  ``kept = (J, Pinv, starts, states, dirs, J32)``: the previous
+    iteration's matrix (in double, or in single precision as ``J32``) and preconditioner, the
+    piece and the ``(nx, ny, c)`` per node its rows were built with (:func:`new_kept`: none),
+    reused when the piece is the same and the matrix larger than ``dense_max`` (module
+    docstring).  ``single``: assemble the matrix of a GMRES solve in single precision (module
+    docstring)."""
     n = g.size
     m = 0
     nb = 0
@@ -153,42 +162,69 @@ def _newton_point(Kn, rb, r, sx, sy, g, rhoT, states, nhat, cfac, unew, dense_ma
     unew[:] = 0.0
     if m == 0:
         return True, kept
-    idx, cs, Jbuf = buffers
-    J, Pinv, starts, kst, dirs = kept
-    reuse = m > dense_max and J.shape[0] == m
+    idx, cs, Jbuf, J32buf = buffers
+    J, Pinv, starts, kst, dirs, J32 = kept
+    none32 = J32buf[:0].reshape((0, 0))
+    # single precision: the matrix is assembled in single precision only (Krylov products)
+    fast = single and m > dense_max and J32buf.size > 0
+    reuse = m > dense_max and (J32.shape[0] if fast else J.shape[0]) == m
     for i in range(n):
         if not reuse:
             break
         if states[i] != kst[i]:
             reuse = False
     if reuse:  # the same piece: idx and cs are those of the kept matrix
-        row = 0
-        b = 0
-        for i in range(n):
-            if states[i] == SLIP:
-                nx, ny, c = nhat[2 * i], nhat[2 * i + 1], cfac[i]
-                if max(abs(nx - dirs[i, 0]), abs(ny - dirs[i, 1]), abs(c - dirs[i, 2])) > eta:
-                    _slip_rows(J, row, i, Kn, idx, cs, m, nx, ny, c, sx, sy, g, rhoT)
-                    _block_inverse(J, Pinv, starts, b)
-                    dirs[i, 0], dirs[i, 1], dirs[i, 2] = nx, ny, c
-                row += 2
-                b += 1
-            elif states[i] == SEPARATED:  # rows independent of the directions
-                row += 3
-                b += 1
+        if fast:
+            _refresh(J32, Pinv, starts, Kn, states, nhat, cfac, idx, cs, m, sx, sy, g, rhoT,
+                     dirs, eta)
+        else:
+            _refresh(J, Pinv, starts, Kn, states, nhat, cfac, idx, cs, m, sx, sy, g, rhoT,
+                     dirs, eta)
         h, r0 = _start(Kn, rb, r, u, states, nhat, cfac, sx, sy, g, rhoT, m)
-        x0 = np.empty(m)
-        for col in range(m):
-            x0[col] = u[idx[col]] / cs[col]
-        x, ok = _krylov(J, h, r0, x0, eta, np.sqrt(np.sum(h * h)), Pinv, starts, nb, False)
+        x, ok = _krylov(J, h, r0, _point(u, idx, cs, m), eta, np.sqrt(np.sum(h * h)), Pinv,
+                        starts, nb, False, J32 if fast else none32)
         if ok:
             return _scatter(x, idx, cs, m, unew), kept
     # a fresh matrix (in the buffer: the kept one is replaced)
     _unknowns(Kn, states, idx, cs)
-    J = Jbuf[:m * m].reshape((m, m)) if m * m <= Jbuf.size else np.empty((m, m))
     dirs = np.zeros((n, 3))
+    if fast:  # a solve that does not converge in one restart cycle assembles in double below
+        J32 = (J32buf[:m * m].reshape((m, m)) if m * m <= J32buf.size
+               else np.empty((m, m), np.float32))
+        _assemble(J32, Kn, states, nhat, cfac, idx, cs, m, sx, sy, g, rhoT, dirs)
+        h, r0 = _start(Kn, rb, r, u, states, nhat, cfac, sx, sy, g, rhoT, m)
+        Pinv, starts, nb = _preconditioner(J32, states, n)
+        J = Jbuf[:0].reshape((0, 0))
+        x, ok = _krylov(J, h, r0, _point(u, idx, cs, m), eta, np.sqrt(np.sum(h * h)), Pinv,
+                        starts, nb, False, J32)
+        if ok:
+            return _scatter(x, idx, cs, m, unew), (J, Pinv, starts, states.copy(), dirs, J32)
+    J = Jbuf[:m * m].reshape((m, m)) if m * m <= Jbuf.size else np.empty((m, m))
+    _assemble(J, Kn, states, nhat, cfac, idx, cs, m, sx, sy, g, rhoT, dirs)
+    h, r0 = _start(Kn, rb, r, u, states, nhat, cfac, sx, sy, g, rhoT, m)
+    if m <= dense_max:  # LU; never reused (and the buffer's old matrix is gone)
+        return _scatter(np.linalg.solve(J, h), idx, cs, m, unew), new_kept(n)
+    Pinv, starts, nb = _preconditioner(J, states, n)
+    x, ok = _krylov(J, h, r0, _point(u, idx, cs, m), eta, np.sqrt(np.sum(h * h)), Pinv, starts,
+                    nb, True, none32)
+    return _scatter(x, idx, cs, m, unew), (J, Pinv, starts, states.copy(), dirs, none32)
+
+
+@njit(cache=True)
+def _point(u, idx, cs, m):
+    """The current point in the scaled unknowns, ``u[idx] / cs``."""
+    x0 = np.empty(m)
+    for col in range(m):
+        x0[col] = u[idx[col]] / cs[col]
+    return x0
+
+
+@njit(cache=True)
+def _assemble(J, Kn, states, nhat, cfac, idx, cs, m, sx, sy, g, rhoT, dirs):
+    """The reduced matrix of the piece ``states`` into ``J`` (double or single precision), and
+    the ``(nx, ny, c)`` per slip node its rows are built with into ``dirs``."""
     row = 0
-    for i in range(n):
+    for i in range(states.size):
         if states[i] == SLIP:
             nx, ny, c = nhat[2 * i], nhat[2 * i + 1], cfac[i]
             _slip_rows(J, row, i, Kn, idx, cs, m, nx, ny, c, sx, sy, g, rhoT)
@@ -200,15 +236,26 @@ def _newton_point(Kn, rb, r, sx, sy, g, rhoT, states, nhat, cfac, unew, dense_ma
                 for col in range(m):
                     J[row, col] = Ka[idx[col]] * cs[col]
                 row += 1
-    h, r0 = _start(Kn, rb, r, u, states, nhat, cfac, sx, sy, g, rhoT, m)
-    if m <= dense_max:  # LU; never reused (and the buffer's old matrix is gone)
-        return _scatter(np.linalg.solve(J, h), idx, cs, m, unew), new_kept(n)
-    Pinv, starts, nb = _preconditioner(J, states, n)
-    x0 = np.empty(m)
-    for col in range(m):
-        x0[col] = u[idx[col]] / cs[col]
-    x, ok = _krylov(J, h, r0, x0, eta, np.sqrt(np.sum(h * h)), Pinv, starts, nb, True)
-    return _scatter(x, idx, cs, m, unew), (J, Pinv, starts, states.copy(), dirs)
+
+
+@njit(cache=True)
+def _refresh(J, Pinv, starts, Kn, states, nhat, cfac, idx, cs, m, sx, sy, g, rhoT, dirs, eta):
+    """The rows of a kept matrix ``J`` (and their preconditioner blocks) of the slip nodes whose
+    ``(nx, ny, c)`` moved by more than ``eta`` since they were built (module docstring)."""
+    row = 0
+    b = 0
+    for i in range(states.size):
+        if states[i] == SLIP:
+            nx, ny, c = nhat[2 * i], nhat[2 * i + 1], cfac[i]
+            if max(abs(nx - dirs[i, 0]), abs(ny - dirs[i, 1]), abs(c - dirs[i, 2])) > eta:
+                _slip_rows(J, row, i, Kn, idx, cs, m, nx, ny, c, sx, sy, g, rhoT)
+                _block_inverse(J, Pinv, starts, b)
+                dirs[i, 0], dirs[i, 1], dirs[i, 2] = nx, ny, c
+            row += 2
+            b += 1
+        elif states[i] == SEPARATED:  # rows independent of the directions
+            row += 3
+            b += 1
 
 
 @njit(cache=True)

@@ -213,7 +213,9 @@ class ConeStepSolver:
         ``equilibrium``: passed to :func:`verify_step`; ``ku0`` (N, 3): ``K u0`` in node order
         when the caller knows it (from earlier products with ``K``: the warm start then skips
         its own; the answer's equilibrium must then be checked, ``equilibrium=True`` or by the
-        caller).
+        caller).  An answer reached by a full Newton step has the reactions ``rb + K u``
+        computed from scratch at it: its equilibrium holds by construction and is reported as 0
+        (:func:`.cone_kernel.attempt`).
 
         Returns ``(u, r, states, method, iterations, residuals, scale)``; ``u, r`` (N, 3)."""
         n = self.n

@@ -124,6 +124,12 @@ except ImportError:  # pragma: no cover
     def njit(*args, **kwargs):  # noqa: D103 - the decorated functions are not called then
         return (lambda fn: fn) if not (args and callable(args[0])) else args[0]
 
+#: The floating-point liberty of the 3-D step's Krylov solver (``fastmath=FAST``): its dot
+#: products may be reassociated (so that they vectorize) and multiply-adds fused; nothing about
+#: NaN, infinities or signed zeros is assumed.  The Newton method checks its own residual after
+#: every step in plain arithmetic.
+FAST = {"reassoc", "contract"}
+
 if HAVE_KERNEL:
     _here = os.path.dirname(os.path.abspath(__file__))
     try:
@@ -131,4 +137,4 @@ if HAVE_KERNEL:
     except Exception:  # pragma: no cover - numba's internals changed: its own stamps are kept
         STAMPED = False
 
-__all__ = ["njit", "HAVE_KERNEL", "KERNEL_SOURCES", "STAMPED", "install_stamp", "sources_digest"]
+__all__ = ["njit", "FAST", "HAVE_KERNEL", "KERNEL_SOURCES", "STAMPED", "install_stamp", "sources_digest"]

@@ -34,7 +34,7 @@ def test_siconos_fc3d_solvers_agree_with_the_cone_step():
     if not bench.siconos_available():
         pytest.skip("Siconos is unavailable under /usr/bin/python3: apt-get install python3-siconos")
     s, load = bench.coupled_system_3d(12, seed=2)
-    sol, RB, U0, U, R = bench.period_steps(s, load, 0.8, S=32)
+    sol, RB, U0, _, U, R = bench.period_steps(s, load, 0.8, S=32)
     assert np.mean([np.mean(np.hypot(*u[:, :2].T) > 0) for u in U]) > 0.3
     W, Q, perm = bench.to_fc3d(sol.data.Kn, RB)
     out = bench.run_siconos(W, Q, s.friction_xy[:, 0], ("nsgs", "nsn_ac"), warm=True)

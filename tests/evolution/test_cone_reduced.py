@@ -6,14 +6,18 @@ at points off the piece (stick nodes that still carry a slip, slip nodes with a 
 kept from the previous Newton iteration is refreshed exactly on the rows (and preconditioner
 blocks) of the nodes whose directions moved by more than the forcing term and nowhere else; and
 warm-started steps through the kept matrices reach the answers of exact LU solves in the same
-number of Newton iterations, without restarts.
+number of Newton iterations, without restarts; the matrices assembled in single precision for
+the Krylov products reach the answers of double-precision ones in the same number of Newton
+iterations, and a single-precision solve that cannot converge is redone in double.
 """
 
 import itertools
 
 import numpy as np
+import pytest
 from test_cone_step import random_3d  # (tests/evolution on the path)
 
+import shakedown as sd
 from shakedown.evolution import cone_kernel as ck
 from shakedown.evolution import cone_reduced as cr
 from shakedown.evolution.cone_step import ConeStepSolver
@@ -124,3 +128,60 @@ def test_warm_steps_through_kept_matrices_match_exact_solves():
         np.testing.assert_allclose(a.slip, b.slip, rtol=0, atol=1e-10 * b.force_scale)
     assert it_.totals["cold_restarts"] == it_.totals["gauss_seidel"] == 0
     assert it_.totals["iterations"] > it_.totals["steps"]  # second iterations happened
+
+
+def _warm_steps(n=30, seed=7, separation=True):
+    """Warm steps as in the test above: ``(v, q, p_w, start)`` per load."""
+    s, v, q_w, p_w = random_3d(n, seed, separation=separation)
+    lu = ConeStepSolver(s, dense_max=10 ** 6)
+    loads = [q_w * np.cos(t) + np.roll(q_w, 1, axis=0) * np.sin(t)
+             for t in np.linspace(0, 2 * np.pi, 8, endpoint=False)]
+    return s, [(v, q, p_w, lu.solve(v, q, p_w)) for q in loads]
+
+
+@pytest.mark.parametrize("separation", [False, True])
+def test_single_precision_products_reach_the_answers_of_double_ones(separation):
+    """The solver's Krylov products in single precision (its default: the reduced matrix
+    assembled in single precision only) against the same solver with double-precision buffers,
+    on the warm steps above (with and without separated nodes): the same answers to the step
+    tolerance in the same number of Newton iterations, and the single-precision matrix was built
+    (in the solver's buffer when it fits: up to 2N unknowns, i.e. without separated nodes)."""
+    s, steps = _warm_steps(separation=separation)
+    single = ConeStepSolver(s, dense_max=4)
+    double = ConeStepSolver(s, dense_max=4)
+    double._buffers = ck.new_buffers(s.n_nodes, False)
+    single._buffers[3][:] = 0.0
+    rng = np.random.default_rng(4)
+    for (v, q, p_w, start), size in itertools.product(steps, (1e-3, 1e-5)):
+        v2 = v + size * rng.normal(size=v.shape)
+        a = single.solve(v2, q, p_w, guess=start)
+        b = double.solve(v2, q, p_w, guess=start)
+        assert a.success and b.success and a.method == b.method == "newton"
+        assert a.iterations == b.iterations
+        np.testing.assert_allclose(a.q, b.q, rtol=0, atol=1e-11 * b.force_scale)
+        np.testing.assert_allclose(a.slip, b.slip, rtol=0, atol=1e-11 * b.force_scale)
+    assert np.any(single._buffers[3] != 0) != separation and double._buffers[3].size == 0
+
+
+def test_single_precision_solves_that_do_not_converge_are_redone_in_double():
+    """An ill-conditioned stiffness (eigenvalues over 6.5 decades, random eigenvectors; N = 40,
+    reduced systems of ~80 unknowns): the single-precision Krylov solve does not converge within
+    one restart cycle, and the step is solved by the double-precision path, with the answers and
+    the Newton iterations of the solver that has no single-precision buffers."""
+    n = 40
+    rng = np.random.default_rng(0)
+    Q, _ = np.linalg.qr(rng.normal(size=(3 * n, 3 * n)))
+    K = (Q * np.logspace(0, 6.5, 3 * n)) @ Q.T
+    K = 0.5 * (K + K.T)
+    s = sd.DiscreteSystem(K[:2 * n, :2 * n], 0.3 * K[:2 * n, 2 * n:], K[2 * n:, 2 * n:],
+                          friction=0.2, dim=3)
+    single, double = ConeStepSolver(s), ConeStepSolver(s)
+    double._buffers = ck.new_buffers(n, False)
+    v, q, p = np.zeros((n, 2)), rng.normal(size=(n, 2)), 0.5 + rng.random(n)
+    start = double.solve(v, q, p)
+    guess = np.column_stack([start.slip_increment, start.gap])
+    guess = guess + 1e-3 * np.abs(guess).max() * rng.normal(size=guess.shape)
+    a, b = single.solve(v, q, p, guess=guess), double.solve(v, q, p, guess=guess)
+    assert a.success and b.success and a.method == b.method == "newton" and a.iterations > 2
+    assert a.iterations == b.iterations
+    np.testing.assert_allclose(a.q, b.q, rtol=0, atol=1e-13 * b.force_scale)

@@ -262,9 +262,11 @@ def test_bad_input_is_refused_by_name():
 
 def test_warm_start_with_its_reactions_given_and_a_wrong_product_caught_by_the_verifier():
     """``solve_raw(..., ku0=K u0)`` (the cyclic driver's warm start, whose product with ``K`` it
-    knows from earlier periods) gives the answer of the plain warm start; with a wrong product the
-    warm answer is not accepted (its verification fails), and the cold restart, which computes
-    its own reactions, finds the right answer."""
+    knows from earlier periods) gives the answer of the plain warm start.  A wrong product does
+    not reach the answer when the Newton method takes a full step (it recomputes the reactions
+    from scratch there); when the guess is accepted as it is, with the wrong reactions, the
+    verifier's equilibrium check rejects it and the cold restart, which computes its own
+    reactions, finds the right answer."""
     s, v, q_w, p_w = random_3d(12, 2)
     sol = ConeStepSolver(s)
     ref = sol.solve(v, q_w, p_w)
@@ -278,8 +280,20 @@ def test_warm_start_with_its_reactions_given_and_a_wrong_product_caught_by_the_v
     assert given[3] == plain[3] == "newton" and given[5].worst <= sol.feas_tol
     np.testing.assert_allclose(given[1], plain[1], rtol=0, atol=1e-12 * F)
     wrong = sol.solve_raw(rb, u0, ku0=ku0 + 1e-6 * F)
-    assert wrong[3] == "newton_cold" and wrong[5].worst <= sol.feas_tol
+    assert wrong[3] == "newton" and wrong[4] >= 1 and wrong[5].worst <= sol.feas_tol
     np.testing.assert_allclose(wrong[1][:, :2], ref.q, rtol=0, atol=1e-10 * F)
+    # the answer as the guess, its product wrong on a stuck node (its residual does not see it)
+    s, v, q_w, p_w = random_3d(12, 2, friction=1.0)
+    sol = ConeStepSolver(s)
+    ref = sol.solve(v, q_w, p_w)
+    rb, F = sol.base(v, q_w, p_w), ref.force_scale
+    exact = np.column_stack([ref.slip_increment, ref.gap])
+    stuck = int(np.flatnonzero(ref.states == 0)[0])
+    bad = (sol.data.Kn @ exact.ravel()).reshape(-1, 3)
+    bad[stuck, 0] += 1e-6 * F
+    caught = sol.solve_raw(rb, exact, ku0=bad)
+    assert caught[3] == "newton_cold" and caught[5].worst <= sol.feas_tol
+    np.testing.assert_allclose(caught[1][:, :2], ref.q, rtol=0, atol=1e-10 * F)
 
 
 def test_buffers_shared_across_steps_give_the_answers_of_fresh_solvers():
