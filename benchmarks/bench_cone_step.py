@@ -236,8 +236,17 @@ def part_siconos(n, lam, repeats, seed=0, baseline=None, solvers=("nsgs", "nsn_a
                     d = np.abs(out[f"{k}_r"] - ours[:, perm]).max(axis=1) / F
                     diffs[(f"Siconos {k.upper()}", start)] = (float(d.max()), int((~ok).sum()))
     med = {k: float(np.median(np.median(np.array(v), axis=0))) for k, v in times.items()}
+    # paired per repeat (this code and Siconos timed within the same repeat, seconds apart):
+    # fastest Siconos solver's median per step / this code's, one ratio per repeat
+    paired = {}
+    for start in ("warm", "cold", "this code's start"):
+        ours = np.median(times[("this code", "warm" if start == "this code's start" else start,
+                                "cpu")], axis=1)
+        sic = np.min([np.median(times[(f"Siconos {k.upper()}", start, "cpu")], axis=1)
+                      for k in solvers], axis=0)
+        paired[start] = (sic / ours).tolist()
     return dict(n=n, lam=lam, seed=seed, F=F, slipping=slipping, med=med, diffs=diffs,
-                steps=len(RB), solvers=solvers)
+                steps=len(RB), solvers=solvers, paired=paired)
 
 
 def part_big(n, lam, S=64, anderson=0, max_cycles=200):
@@ -408,16 +417,20 @@ def main():
                 sic = min(m[(w_, start, "cpu")] for w_ in who if w_.startswith("Siconos"))
                 base = "warm" if start == "this code's start" else start
                 summary.append((seed, start, sic / o,
-                                m[("main", base, "cpu")] / o if a.baseline else float("nan")))
+                                m[("main", base, "cpu")] / o if a.baseline else float("nan"),
+                                r["paired"][start]))
             lines += ["", f"Load after: {os.getloadavg()}", ""]
         lines += ["### Summary over systems: fastest Siconos solver / this code (CPU per step)", "",
-                  "| start | median | worst (smallest) | main / this code (median) |",
-                  "|---|---|---|---|"]
+                  "| start | median | worst (smallest) | main / this code (median) | paired per "
+                  "repeat: median, worst (seeds x repeats) |",
+                  "|---|---|---|---|---|"]
         for start in ("warm", "cold", "this code's start"):
             x = np.array([q[2] for q in summary if q[1] == start])
             y = np.array([q[3] for q in summary if q[1] == start])
+            z = np.concatenate([q[4] for q in summary if q[1] == start])
             lines.append(f"| {start} | {np.median(x):.1f}x | {x.min():.1f}x | "
-                         f"{np.median(y):.2f}x |")
+                         f"{np.median(y):.2f}x | {np.median(z):.1f}x, {z.min():.1f}x "
+                         f"({z.size}) |")
         lines.append("")
     if "hot" in parts:
         lines += ["## Warm steps of period 3: in sequence against repeated in place (CPU)", "",

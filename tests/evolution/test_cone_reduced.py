@@ -185,3 +185,26 @@ def test_single_precision_solves_that_do_not_converge_are_redone_in_double():
     assert a.success and b.success and a.method == b.method == "newton" and a.iterations > 2
     assert a.iterations == b.iterations
     np.testing.assert_allclose(a.q, b.q, rtol=0, atol=1e-13 * b.force_scale)
+
+
+@pytest.mark.parametrize("k_scale, f_scale", [(1e-40, 1e30), (1e-20, 1e-30), (1e40, 1e-30)])
+def test_single_precision_products_at_extreme_units(k_scale, f_scale):
+    """Stiffness and forces rescaled far beyond single precision's range of magnitudes (the
+    matrix is assembled with its columns scaled to unit diagonal, so its entries are
+    ``~sqrt(k)``; where they leave single precision's range the solve is redone in double):
+    the answers of the double-precision solver to the step tolerance, in the same number of
+    Newton iterations, warm steps from slightly other slips as above."""
+    s, steps = _warm_steps()
+    S = sd.DiscreteSystem(s.A * k_scale, s.B * k_scale, s.C * k_scale, friction=s.friction_xy,
+                          dim=3)
+    single, double = ConeStepSolver(S, dense_max=4), ConeStepSolver(S, dense_max=4)
+    double._buffers = ck.new_buffers(S.n_nodes, False)
+    rng = np.random.default_rng(1)
+    for v, q, p, start in steps:
+        g = np.column_stack([start.slip_increment, start.gap]) * f_scale / k_scale
+        v2 = (v + 1e-3 * rng.normal(size=v.shape)) * f_scale / k_scale
+        a = single.solve(v2, q * f_scale, p * f_scale, guess=g)
+        b = double.solve(v2, q * f_scale, p * f_scale, guess=g)
+        assert a.success and b.success and a.method == b.method == "newton"
+        assert a.iterations == b.iterations >= 1
+        np.testing.assert_allclose(a.q, b.q, rtol=0, atol=1e-11 * b.force_scale)
