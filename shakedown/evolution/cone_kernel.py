@@ -34,10 +34,11 @@ current one; the iteration stops when the residual is below ``tol`` of the force
 Precision.  The matrix of a GMRES solve is assembled in single precision only, for its
 products (half the memory traffic of the products that dominate the step; a relative
 perturbation of ~1e-7 of the Newton matrix, i.e. a slightly more inexact Newton direction);
-a solve that does not converge within one restart cycle is redone in double
-(:func:`.cone_reduced._newton_point`), and the attempt continues in double once a
-single-precision direction is not accepted in full or does not reduce ``max |phi|`` tenfold
-(:func:`newton_cached`).  Everything else is double: the residual ``phi`` and the stopping test,
+a solve that does not converge within one restart cycle goes on in double from where it got
+(:func:`.cone_reduced._newton_point`), and the attempt continues in double once that happened
+or a single-precision direction is not accepted in full or does not reduce ``max |phi|``
+tenfold (:func:`newton_cached`); a solver whose single-precision solves mostly had to go on in
+double (:data:`TRIES`, an ill-conditioned system) stops trying them.  Everything else is double: the residual ``phi`` and the stopping test,
 the reactions, which are recomputed from scratch (``r = r_b + K u``) at every full Newton step,
 so that the answer's equilibrium holds by construction and needs no second product to be
 checked (:func:`attempt`; a damped last step or a guess accepted as it is are checked).
@@ -54,6 +55,10 @@ from .cone_linear import DENSE_MAX
 from .cone_reduced import _newton_point, new_buffers, new_kept
 from .cone_states import SEPARATED, SLIP, STICK
 from .kernel_jit import HAVE_KERNEL, njit
+
+#: Single-precision solves redone in double (and more than half of those tried) after which a
+#: solver's later steps use double precision only (:func:`newton_cached`).
+TRIES = 8
 
 #: Exit codes of :func:`newton`.
 CONVERGED, STALLED, MAX_ITER, SINGULAR = 0, 1, 2, 3
@@ -187,7 +192,10 @@ def newton_cached(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, de
     dr = np.empty(3 * n)
     r1 = np.empty(3 * n)
     kept = new_kept(n)
-    single = buffers[3].size > 0  # single-precision Krylov products until a direction fails
+    # single-precision Krylov products until a direction fails, unless most such solves of this
+    # solver (its buffers) had to be redone in double (an ill-conditioned system)
+    tally = buffers[4]
+    single = buffers[3].size > 0 and not (tally[1] >= TRIES and 2 * tally[1] > tally[0])
     constructed = not given_r
     if not given_r:
         _reactions(Kn, rb, u, r)
@@ -204,6 +212,11 @@ def newton_cached(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, de
         if not ok:
             return SINGULAR, it, np.max(np.abs(phi)), constructed
         used = single and _unknowns_count(states) > dense_max  # (else solved by LU)
+        if used:
+            tally[0] += 1
+            if kept[5].shape[0] == 0:  # the single-precision solve did not converge and was
+                tally[1] += 1  # redone in double: double for the rest of the attempt
+                single = used = False
         # the reactions at the Newton point from scratch (r1 = rb + K unew), and the direction
         _reactions(Kn, rb, unew, r1)
         for k in range(3 * n):

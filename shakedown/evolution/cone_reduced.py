@@ -26,7 +26,8 @@ N = 100.)
 With ``single`` the matrix of a GMRES solve is assembled (and kept, and refreshed) in single
 precision only (:func:`.cone_linear._krylov`'s products; the preconditioner's blocks are
 inverted from it too); when that solve does not converge within one restart cycle the matrix is
-assembled in double and solved as without ``single`` (:mod:`.cone_kernel`, "Precision").
+assembled in double and the solve goes on from where it got, to the same target
+(:mod:`.cone_kernel`, "Precision").
 """
 
 from __future__ import annotations
@@ -125,12 +126,14 @@ def _start(Kn, rb, r, u, states, nhat, cfac, sx, sy, g, rhoT, m):
 
 @njit(cache=True)
 def new_buffers(n, single=True):
-    """The buffers of :func:`_newton_point` for ``n`` nodes: ``(idx, cs, Jbuf, J32buf)``, the
-    unknowns, their column scales and room for reduced matrices of up to ``2n`` unknowns (larger
-    ones are allocated; fresh pages for every matrix cost more than its assembly), in double and
-    (``single``; else empty) in single precision for the Krylov solver's products."""
+    """The buffers of :func:`_newton_point` for ``n`` nodes: ``(idx, cs, Jbuf, J32buf, tally)``,
+    the unknowns, their column scales and room for reduced matrices of up to ``2n`` unknowns
+    (larger ones are allocated; fresh pages for every matrix cost more than its assembly), in
+    double and (``single``; else empty) in single precision for the Krylov solver's products,
+    and the counts of single-precision solves tried and redone in double
+    (:func:`.cone_kernel.newton_cached` stops trying them when most were redone)."""
     return (np.empty(3 * n, np.int64), np.empty(3 * n), np.empty(4 * n * n),
-            np.empty(4 * n * n if single else 0, np.float32))
+            np.empty(4 * n * n if single else 0, np.float32), np.zeros(2, np.int64))
 
 
 @njit(cache=True)
@@ -162,7 +165,7 @@ def _newton_point(Kn, rb, r, sx, sy, g, rhoT, states, nhat, cfac, unew, dense_ma
     unew[:] = 0.0
     if m == 0:
         return True, kept
-    idx, cs, Jbuf, J32buf = buffers
+    idx, cs, Jbuf, J32buf, _ = buffers
     J, Pinv, starts, kst, dirs, J32 = kept
     none32 = J32buf[:0].reshape((0, 0))
     # single precision: the matrix is assembled in single precision only (Krylov products)
@@ -188,25 +191,31 @@ def _newton_point(Kn, rb, r, sx, sy, g, rhoT, states, nhat, cfac, unew, dense_ma
     # a fresh matrix (in the buffer: the kept one is replaced)
     _unknowns(Kn, states, idx, cs)
     dirs = np.zeros((n, 3))
-    if fast:  # a solve that does not converge in one restart cycle assembles in double below
+    h, r0 = _start(Kn, rb, r, u, states, nhat, cfac, sx, sy, g, rhoT, m)
+    hn = np.sqrt(np.sum(h * h))
+    x = _point(u, idx, cs, m)
+    xs = x
+    if fast:  # a solve that does not converge in one restart cycle goes on in double below
         J32 = (J32buf[:m * m].reshape((m, m)) if m * m <= J32buf.size
                else np.empty((m, m), np.float32))
         _assemble(J32, Kn, states, nhat, cfac, idx, cs, m, sx, sy, g, rhoT, dirs)
-        h, r0 = _start(Kn, rb, r, u, states, nhat, cfac, sx, sy, g, rhoT, m)
         Pinv, starts, nb = _preconditioner(J32, states, n)
         J = Jbuf[:0].reshape((0, 0))
-        x, ok = _krylov(J, h, r0, _point(u, idx, cs, m), eta, np.sqrt(np.sum(h * h)), Pinv,
-                        starts, nb, False, J32)
+        xs, ok = _krylov(J, h, r0, x, eta, hn, Pinv, starts, nb, False, J32)
         if ok:
-            return _scatter(x, idx, cs, m, unew), (J, Pinv, starts, states.copy(), dirs, J32)
+            return _scatter(xs, idx, cs, m, unew), (J, Pinv, starts, states.copy(), dirs, J32)
     J = Jbuf[:m * m].reshape((m, m)) if m * m <= Jbuf.size else np.empty((m, m))
     _assemble(J, Kn, states, nhat, cfac, idx, cs, m, sx, sy, g, rhoT, dirs)
-    h, r0 = _start(Kn, rb, r, u, states, nhat, cfac, sx, sy, g, rhoT, m)
     if m <= dense_max:  # LU; never reused (and the buffer's old matrix is gone)
         return _scatter(np.linalg.solve(J, h), idx, cs, m, unew), new_kept(n)
     Pinv, starts, nb = _preconditioner(J, states, n)
-    x, ok = _krylov(J, h, r0, _point(u, idx, cs, m), eta, np.sqrt(np.sum(h * h)), Pinv, starts,
-                    nb, True, none32)
+    if fast:  # from where the single-precision cycle got, to the same target
+        rx = h - J @ xs
+        rn = np.sqrt(np.sum(rx * rx))
+        etx = eta * np.sqrt(np.sum(r0 * r0)) / rn if rn > 0.0 else 1.0
+        x, ok = _krylov(J, h, rx, xs, etx, hn, Pinv, starts, nb, True, none32)
+    else:
+        x, ok = _krylov(J, h, r0, x, eta, hn, Pinv, starts, nb, True, none32)
     return _scatter(x, idx, cs, m, unew), (J, Pinv, starts, states.copy(), dirs, none32)
 
 
