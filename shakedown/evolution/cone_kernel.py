@@ -38,10 +38,11 @@ a solve that does not converge within one restart cycle goes on in double from w
 (:func:`.cone_reduced._newton_point`), and the attempt continues in double once that happened
 or a single-precision direction is not accepted in full or does not reduce ``max |phi|``
 tenfold (:func:`newton_cached`); a solver whose single-precision solves mostly had to go on in
-double (:data:`TRIES`, an ill-conditioned system) stops trying them.  Everything else is double: the residual ``phi`` and the stopping test,
-the reactions, which are recomputed from scratch (``r = r_b + K u``) at every full Newton step,
-so that the answer's equilibrium holds by construction and needs no second product to be
-checked (:func:`attempt`; a damped last step or a guess accepted as it is are checked).
+double (:data:`TRIES`, an ill-conditioned system) stops trying them.  Everything else is
+double: the residual ``phi`` and the stopping test, and the reactions, which are recomputed
+from scratch (``r = r_b + K u``) at every full Newton step, so that the answer's equilibrium
+holds by construction and needs no second product to be checked (:func:`attempt`; a damped
+last step or a guess accepted as it is are checked).
 
 The caller (:class:`~.cone_step.ConeStepSolver`) verifies every answer by its own conditions,
 independently of this formulation.  Without numba the same functions run as Python (slow).
