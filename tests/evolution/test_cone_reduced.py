@@ -8,7 +8,8 @@ blocks) of the nodes whose directions moved by more than the forcing term and no
 warm-started steps through the kept matrices reach the answers of exact LU solves in the same
 number of Newton iterations, without restarts; the matrices assembled in single precision for
 the Krylov products reach the answers of double-precision ones in the same number of Newton
-iterations, and a single-precision solve that cannot converge is redone in double.
+iterations, a single-precision solve that cannot converge goes on in double, and a solver
+whose single-precision solves mostly had to go on in double stops trying them.
 """
 
 import itertools
@@ -188,7 +189,7 @@ def test_single_precision_solves_that_do_not_converge_go_on_in_double():
     np.testing.assert_allclose(a.q, b.q, rtol=0, atol=1e-11 * b.force_scale)
     tried, redone = single._buffers[4]
     assert redone >= 1 and tried >= redone
-    # once most of its single-precision solves were redone (TRIES of them), the solver stops
+    # once most of its single-precision solves went on in double (TRIES), the solver stops
     # trying them: its later steps are solved in double from the start, with the same answers
     for k in range(2 * ck.TRIES):
         g = guess * (1 + 1e-4 * k)
@@ -202,7 +203,7 @@ def test_single_precision_solves_that_do_not_converge_go_on_in_double():
 def test_single_precision_products_at_extreme_units(k_scale, f_scale):
     """Stiffness and forces rescaled far beyond single precision's range of magnitudes (the
     matrix is assembled with its columns scaled to unit diagonal, so its entries are
-    ``~sqrt(k)``; where they leave single precision's range the solve is redone in double):
+    ``~sqrt(k)``; where they leave single precision's range the solve goes on in double):
     the answers of the double-precision solver to the step tolerance, in the same number of
     Newton iterations, warm steps from slightly other slips as above."""
     s, steps = _warm_steps()
