@@ -85,8 +85,14 @@ def benchmark_tables(folder: Path, path: Path) -> None:
     for res in sorted(folder.glob("RESULTS_*.md")):
         lines = res.read_text().splitlines()
         title = next((ln.lstrip("# ").strip() for ln in lines if ln.startswith("# ")), res.stem)
-        command = next((ln.strip().strip("`") for ln in lines
-                        if re.match(r"^\s*(Command.*`|\s{4}(OPENBLAS\S* )*python)", ln)), "")
+        at = next((k for k, ln in enumerate(lines)
+                   if re.match(r"^\s*(Command:.*`|\s{4}(env \S+ |OPENBLAS\S* )*python)", ln)), None)
+        command = ""
+        if at is not None:  # with its continuation lines (a trailing backslash)
+            command = lines[at].strip().strip("`")
+            while command.endswith("\\") and at + 1 < len(lines):
+                at += 1
+                command = command[:-1].rstrip() + " " + lines[at].strip()
         table, started = [], False
         for ln in lines:
             if ln.lstrip().startswith("|"):

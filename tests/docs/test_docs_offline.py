@@ -94,3 +94,30 @@ def test_notebook_titles_are_numbered_one_way():
 
 def test_the_extension_module_is_importable_by_its_sphinx_name():
     importlib.import_module("sphinx-mathjax-offline")
+
+
+def test_benchmark_headline_commands_are_commands_not_prose(tmp_path):
+    """``docs/_ext/generate.py`` takes each RESULTS file's command from a ``Command:`` line or
+    the first indented command (with its continuation lines), not from a sentence that begins
+    with "Commands (" and quotes a name; every command taken from the repository's RESULTS
+    files runs a benchmark script."""
+    import sys
+    sys.path.insert(0, str(DOCS / "_ext"))
+    try:
+        generate = importlib.import_module("generate")
+    finally:
+        sys.path.pop(0)
+    res = tmp_path / "bench"
+    res.mkdir()
+    (res / "RESULTS_x.md").write_text(
+        "# X\n\nCommands (from the root; `python3-siconos` from Debian):\n\n"
+        "    env $E python3 benchmarks/bench_x.py --n 100 \\\n        --baseline /tmp/base\n"
+        "    env $E python3 benchmarks/bench_x.py --parts big\n\n| a | b |\n|---|---|\n| 1 | 2 |\n")
+    out = tmp_path / "benchmarks.md"
+    generate.benchmark_tables(res, out)
+    assert ("Command: `env $E python3 benchmarks/bench_x.py --n 100 --baseline /tmp/base`"
+            in out.read_text())
+    generate.benchmark_tables(ROOT / "benchmarks", out)
+    commands = re.findall(r"^Command: `(.*)`$", out.read_text(), flags=re.M)
+    assert commands and all(re.search(r"python3? benchmarks/\S+\.py", c) for c in commands), \
+        commands
