@@ -53,7 +53,7 @@ from __future__ import annotations
 import numpy as np
 
 from .cone_linear import DENSE_MAX
-from .cone_reduced import _newton_point, new_buffers, new_kept
+from .cone_reduced import _newton_point, _size, new_buffers, new_kept
 from .cone_states import SEPARATED, SLIP, STICK
 from .kernel_jit import HAVE_KERNEL, njit
 
@@ -115,15 +115,6 @@ def _classify(r, u, sx, sy, g, rhoT, rhoN, states, phi, nhat, cfac, slack):
                 phi[3 * i + 1] = sy[i] * (qty - rad * ny)
         merit += phi[3 * i] ** 2 + phi[3 * i + 1] ** 2 + phi[3 * i + 2] ** 2
     return merit
-
-
-@njit(cache=True)
-def _unknowns_count(states):
-    """The number of unknowns of the reduced Newton system of the piece ``states``."""
-    m = 0
-    for i in range(states.size):
-        m += 2 if states[i] == SLIP else (3 if states[i] == SEPARATED else 0)
-    return m
 
 
 @njit(cache=True)
@@ -212,7 +203,7 @@ def newton_cached(Kn, rb, sx, sy, g, rhoT, rhoN, u, r, states, tol, max_iter, de
                                  u, eta, buffers, kept, single)
         if not ok:
             return SINGULAR, it, np.max(np.abs(phi)), constructed
-        used = single and _unknowns_count(states) > dense_max  # (else solved by LU)
+        used = single and _size(states)[0] > dense_max  # (else solved by LU)
         if used:
             tally[0] += 1
             if kept[5].shape[0] == 0:  # the single-precision solve did not converge and was

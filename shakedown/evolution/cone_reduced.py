@@ -144,6 +144,19 @@ def new_kept(n):
 
 
 @njit(cache=True)
+def _size(states):
+    """The number of unknowns of the reduced system of the piece ``states`` (2 per slip node, 3
+    per separated one) and the number of its node blocks."""
+    m = 0
+    nb = 0
+    for i in range(states.size):
+        if states[i] == SLIP or states[i] == SEPARATED:
+            m += 2 if states[i] == SLIP else 3
+            nb += 1
+    return m, nb
+
+
+@njit(cache=True)
 def _newton_point(Kn, rb, r, sx, sy, g, rhoT, states, nhat, cfac, unew, dense_max, u, eta,
                   buffers, kept, single=False):
     """The reduced semismooth Newton step of the current piece at ``(u, r)``: ``unew`` (3N,);
@@ -156,12 +169,7 @@ def _newton_point(Kn, rb, r, sx, sy, g, rhoT, states, nhat, cfac, unew, dense_ma
     docstring).  ``single``: assemble the matrix of a GMRES solve in single precision (module
     docstring)."""
     n = g.size
-    m = 0
-    nb = 0
-    for i in range(n):
-        if states[i] == SLIP or states[i] == SEPARATED:
-            m += 2 if states[i] == SLIP else 3
-            nb += 1
+    m, nb = _size(states)
     unew[:] = 0.0
     if m == 0:
         return True, kept
@@ -278,4 +286,4 @@ def _scatter(x, idx, cs, m, unew):
     return True
 
 
-__all__ = ["_newton_point", "_unknowns", "_start", "new_buffers", "new_kept"]
+__all__ = ["_newton_point", "_unknowns", "_start", "_size", "new_buffers", "new_kept"]

@@ -104,6 +104,16 @@ def test_kept_matrix_is_refreshed_exactly_where_the_directions_moved():
     np.testing.assert_array_equal(kept2[4][kept_rows, 0], nh[2 * kept_rows])
 
 
+def _warm_steps(n=30, seed=7, separation=True):
+    """Steps of a random system under a load turning over eight directions: ``(v, q, p_w,
+    start)`` per load, ``start`` its answer by exact LU solves."""
+    s, v, q_w, p_w = random_3d(n, seed, separation=separation)
+    lu = ConeStepSolver(s, dense_max=10 ** 6)
+    loads = [q_w * np.cos(t) + np.roll(q_w, 1, axis=0) * np.sin(t)
+             for t in np.linspace(0, 2 * np.pi, 8, endpoint=False)]
+    return s, [(v, q, p_w, lu.solve(v, q, p_w)) for q in loads]
+
+
 def test_warm_steps_through_kept_matrices_match_exact_solves():
     """Steps started from the answers of the same steps with slightly other slips (as a cyclic
     run starts period ``c`` from period ``c - 1``: the directions move little, so the second
@@ -111,15 +121,12 @@ def test_warm_steps_through_kept_matrices_match_exact_solves():
     unknowns solved by GMRES with ``dense_max = 4``) against exact LU solves (``dense_max``
     above the system size): the same answers to the step tolerance, no more Newton iterations,
     no restart."""
-    s, v, q_w, p_w = random_3d(30, 7, separation=True)
+    s, steps = _warm_steps()
     it_ = ConeStepSolver(s, dense_max=4)
     lu = ConeStepSolver(s, dense_max=10 ** 6)
     rng = np.random.default_rng(3)
-    loads = [q_w * np.cos(t) + np.roll(q_w, 1, axis=0) * np.sin(t)
-             for t in np.linspace(0, 2 * np.pi, 8, endpoint=False)]
-    starts = [lu.solve(v, q, p_w) for q in loads]
     assert it_.totals["steps"] == 0
-    for (q, start), size in itertools.product(zip(loads, starts, strict=True), (1e-4, 1e-5, 1e-6)):
+    for (v, q, p_w, start), size in itertools.product(steps, (1e-4, 1e-5, 1e-6)):
         v2 = v + size * rng.normal(size=v.shape)  # 1e-6: all rows of the second iteration kept
         a = it_.solve(v2, q, p_w, guess=start)
         b = lu.solve(v2, q, p_w, guess=start)
@@ -131,20 +138,11 @@ def test_warm_steps_through_kept_matrices_match_exact_solves():
     assert it_.totals["iterations"] > it_.totals["steps"]  # second iterations happened
 
 
-def _warm_steps(n=30, seed=7, separation=True):
-    """Warm steps as in the test above: ``(v, q, p_w, start)`` per load."""
-    s, v, q_w, p_w = random_3d(n, seed, separation=separation)
-    lu = ConeStepSolver(s, dense_max=10 ** 6)
-    loads = [q_w * np.cos(t) + np.roll(q_w, 1, axis=0) * np.sin(t)
-             for t in np.linspace(0, 2 * np.pi, 8, endpoint=False)]
-    return s, [(v, q, p_w, lu.solve(v, q, p_w)) for q in loads]
-
-
 @pytest.mark.parametrize("separation", [False, True])
 def test_single_precision_products_reach_the_answers_of_double_ones(separation):
     """The solver's Krylov products in single precision (its default: the reduced matrix
     assembled in single precision only) against the same solver with double-precision buffers,
-    on the warm steps above (with and without separated nodes): the same answers to the step
+    on the warm steps of :func:`_warm_steps` (with and without separated nodes): the same answers to the step
     tolerance in the same number of Newton iterations, and the single-precision matrix was built
     (in the solver's buffer when it fits: up to 2N unknowns, i.e. without separated nodes)."""
     s, steps = _warm_steps(separation=separation)
